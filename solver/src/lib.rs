@@ -1,0 +1,12 @@
+//! ODE integrators and linear-time-invariant numerics for ctlgraph.
+//!
+//! This crate knows differential equations, not block diagrams: the graph
+//! simulator in `ctlgraph-core` implements [`OdeSystem`] and drives an
+//! [`Integrator`] from one major step to the next.
+
+pub mod lti;
+pub mod ode;
+pub mod poly;
+
+pub use lti::{StateSpace, tf2ss, zpk2tf};
+pub use ode::{Integrator, Method, OdeSystem, SolverError, Stats};

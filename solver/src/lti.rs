@@ -1,0 +1,238 @@
+//! Linear time-invariant systems in state-space form, and the realisation
+//! of transfer functions.
+
+use crate::poly;
+use nalgebra::Complex;
+use std::fmt;
+
+/// `x' = A x + B u`, `y = C x + D u` (or the same as a difference equation
+/// for discrete systems), with row-major dense matrices: `n` states,
+/// `m` inputs, `p` outputs. Evaluation allocates nothing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StateSpace {
+    pub n: usize,
+    pub m: usize,
+    pub p: usize,
+    pub a: Vec<f64>,
+    pub b: Vec<f64>,
+    pub c: Vec<f64>,
+    pub d: Vec<f64>,
+}
+
+/// Why a system could not be built.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LtiError {
+    /// The numerator's degree exceeds the denominator's.
+    Improper { num_degree: usize, den_degree: usize },
+    /// The denominator is the zero polynomial.
+    ZeroDenominator,
+    /// Matrix shapes do not fit together.
+    Shape(String),
+    /// Roots not in conjugate pairs.
+    Roots(String),
+}
+
+impl fmt::Display for LtiError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LtiError::Improper { num_degree, den_degree } => write!(
+                f,
+                "improper transfer function: numerator degree {num_degree} exceeds denominator degree {den_degree}"
+            ),
+            LtiError::ZeroDenominator => f.write_str("the denominator is zero"),
+            LtiError::Shape(s) | LtiError::Roots(s) => f.write_str(s),
+        }
+    }
+}
+
+impl std::error::Error for LtiError {}
+
+impl StateSpace {
+    /// Builds a system from row-major matrices, checking their shapes.
+    pub fn new(
+        a: Vec<Vec<f64>>,
+        b: Vec<Vec<f64>>,
+        c: Vec<Vec<f64>>,
+        d: Vec<Vec<f64>>,
+    ) -> Result<Self, LtiError> {
+        let n = a.len();
+        let rect = |m: &[Vec<f64>], name: &str| -> Result<usize, LtiError> {
+            let cols = m.first().map_or(0, Vec::len);
+            if m.iter().any(|r| r.len() != cols) {
+                return Err(LtiError::Shape(format!("{name}: rows have different lengths")));
+            }
+            Ok(cols)
+        };
+        if rect(&a, "A")? != n {
+            return Err(LtiError::Shape(format!("A must be square, got {n} rows of {}", rect(&a, "A")?)));
+        }
+        let m = rect(&b, "B")?;
+        if b.len() != n {
+            return Err(LtiError::Shape(format!("B must have {n} rows (one per state), got {}", b.len())));
+        }
+        let p = c.len();
+        if rect(&c, "C")? != n && p > 0 {
+            return Err(LtiError::Shape(format!("C must have {n} columns (one per state)")));
+        }
+        let m = if n == 0 { rect(&d, "D")? } else { m };
+        if d.len() != p || rect(&d, "D")? != m {
+            return Err(LtiError::Shape(format!("D must be {p}×{m} (outputs × inputs)")));
+        }
+        let flat = |m: Vec<Vec<f64>>| m.into_iter().flatten().collect::<Vec<_>>();
+        Ok(StateSpace { n, m, p, a: flat(a), b: flat(b), c: flat(c), d: flat(d) })
+    }
+
+    /// Whether any output depends directly on the input (D ≠ 0).
+    pub fn has_feedthrough(&self) -> bool {
+        self.d.iter().any(|&v| v != 0.0)
+    }
+
+    /// `dx = A x + B u` (also the next state of a discrete system).
+    pub fn derivative(&self, x: &[f64], u: &[f64], dx: &mut [f64]) {
+        for i in 0..self.n {
+            let ax: f64 = (0..self.n).map(|j| self.a[i * self.n + j] * x[j]).sum();
+            let bu: f64 = (0..self.m).map(|j| self.b[i * self.m + j] * u[j]).sum();
+            dx[i] = ax + bu;
+        }
+    }
+
+    /// `y = C x + D u`.
+    pub fn output(&self, x: &[f64], u: &[f64], y: &mut [f64]) {
+        for i in 0..self.p {
+            let cx: f64 = (0..self.n).map(|j| self.c[i * self.n + j] * x[j]).sum();
+            let du: f64 = (0..self.m).map(|j| self.d[i * self.m + j] * u[j]).sum();
+            y[i] = cx + du;
+        }
+    }
+
+    /// `y = C x` only, for systems without feedthrough (callable before the
+    /// input of this step is known).
+    pub fn output_state_only(&self, x: &[f64], y: &mut [f64]) {
+        for i in 0..self.p {
+            y[i] = (0..self.n).map(|j| self.c[i * self.n + j] * x[j]).sum();
+        }
+    }
+}
+
+/// Realises `num(s)/den(s)` (descending powers) in controllable canonical
+/// form, the realisation MATLAB's `tf2ss` returns:
+///
+/// ```text
+/// A = [-a1 -a2 … -an; 1 0 … 0; …; 0 … 1 0],  B = [1 0 … 0]ᵀ,
+/// C = [b1 − b0·a1, …, bn − b0·an],            D = b0
+/// ```
+///
+/// after normalising `den` to be monic and padding `num` to its length.
+pub fn tf2ss(num: &[f64], den: &[f64]) -> Result<StateSpace, LtiError> {
+    let den = poly::trim_leading_zeros(den);
+    if den.is_empty() {
+        return Err(LtiError::ZeroDenominator);
+    }
+    let num = poly::trim_leading_zeros(num);
+    let (nd, nn) = (den.len() - 1, num.len().saturating_sub(1));
+    if num.len() > den.len() {
+        return Err(LtiError::Improper { num_degree: nn, den_degree: nd });
+    }
+    let lead = den[0];
+    let a_coef: Vec<f64> = den[1..].iter().map(|v| v / lead).collect();
+    let mut b_coef = vec![0.0; den.len()];
+    for (i, v) in num.iter().enumerate() {
+        b_coef[den.len() - num.len() + i] = v / lead;
+    }
+    let n = nd;
+    let d0 = b_coef[0];
+    let mut a = vec![0.0; n * n];
+    for j in 0..n {
+        a[j] = -a_coef[j];
+    }
+    for i in 1..n {
+        a[i * n + (i - 1)] = 1.0;
+    }
+    let mut b = vec![0.0; n];
+    if n > 0 {
+        b[0] = 1.0;
+    }
+    let c: Vec<f64> = (0..n).map(|i| b_coef[i + 1] - d0 * a_coef[i]).collect();
+    Ok(StateSpace { n, m: 1, p: 1, a, b, c, d: vec![d0] })
+}
+
+/// Numerator and denominator of `k · Π(s − zᵢ) / Π(s − pᵢ)`.
+pub fn zpk2tf(
+    zeros: &[Complex<f64>],
+    poles: &[Complex<f64>],
+    gain: f64,
+) -> Result<(Vec<f64>, Vec<f64>), LtiError> {
+    let num: Vec<f64> = poly::from_roots(zeros).map_err(LtiError::Roots)?.iter().map(|c| c * gain).collect();
+    let den = poly::from_roots(poles).map_err(LtiError::Roots)?;
+    Ok((num, den))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Frequency response of a state-space SISO system at s = jω, via
+    /// (jωI − A)⁻¹ by complex Gaussian elimination; cross-checks tf2ss.
+    fn freq_response(ss: &StateSpace, w: f64) -> Complex<f64> {
+        let n = ss.n;
+        let mut m = nalgebra::DMatrix::<Complex<f64>>::zeros(n, n);
+        for i in 0..n {
+            for j in 0..n {
+                m[(i, j)] = Complex::new(-ss.a[i * n + j], if i == j { w } else { 0.0 });
+            }
+        }
+        let b = nalgebra::DVector::from_iterator(n, ss.b.iter().map(|&v| Complex::new(v, 0.0)));
+        let x = m.lu().solve(&b).expect("regular");
+        let cx: Complex<f64> = (0..n).map(|i| x[i] * ss.c[i]).sum();
+        cx + ss.d[0]
+    }
+
+    fn tf_response(num: &[f64], den: &[f64], w: f64) -> Complex<f64> {
+        let s = Complex::new(0.0, w);
+        let ev = |p: &[f64]| p.iter().fold(Complex::new(0.0, 0.0), |acc, &c| acc * s + c);
+        ev(num) / ev(den)
+    }
+
+    #[test]
+    fn realisation_matches_transfer_function() {
+        for (num, den) in [
+            (vec![1.639e4], vec![1.0, 154.8, 2.242e4]),
+            (vec![2.0, 3.0, 1.0], vec![4.0, 1.0, 5.0]),
+            (vec![1.0, 0.0], vec![1.0, 2.0, 3.0, 4.0]),
+        ] {
+            let ss = tf2ss(&num, &den).unwrap();
+            for w in [0.0, 0.3, 7.0, 150.0] {
+                let (a, b) = (freq_response(&ss, w), tf_response(&num, &den, w));
+                assert!((a - b).norm() <= 1e-10 * b.norm().max(1.0), "w={w}: {a} vs {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn improper_and_zero_denominators_are_rejected() {
+        assert_eq!(
+            tf2ss(&[1.0, 0.0, 0.0], &[1.0, 1.0]),
+            Err(LtiError::Improper { num_degree: 2, den_degree: 1 })
+        );
+        assert_eq!(tf2ss(&[1.0], &[0.0, 0.0]), Err(LtiError::ZeroDenominator));
+    }
+
+    #[test]
+    fn static_gain_is_pure_feedthrough() {
+        let ss = tf2ss(&[3.0], &[2.0]).unwrap();
+        assert_eq!((ss.n, ss.d[0]), (0, 1.5));
+    }
+
+    #[test]
+    fn state_space_shapes_are_checked() {
+        let ok = StateSpace::new(
+            vec![vec![0.0, 1.0], vec![-2.0, -3.0]],
+            vec![vec![0.0], vec![1.0]],
+            vec![vec![1.0, 0.0]],
+            vec![vec![0.0]],
+        );
+        assert!(ok.is_ok());
+        let bad = StateSpace::new(vec![vec![0.0, 1.0]], vec![vec![0.0]], vec![vec![1.0]], vec![vec![0.0]]);
+        assert!(matches!(bad, Err(LtiError::Shape(_))));
+    }
+}

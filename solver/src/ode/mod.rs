@@ -1,0 +1,376 @@
+//! Explicit ODE integrators: fixed-step Euler, Heun and classic RK4, and the
+//! adaptive Dormand–Prince 5(4) pair with embedded error control.
+//!
+//! The caller owns the time line. Each call to [`Integrator::advance`] moves
+//! the state from `t` towards a limit `t_limit` (the next sample hit, event or
+//! stop time) and never past it: the fixed-step methods take exactly one step
+//! to `t_limit`, the adaptive method takes one accepted step and lands
+//! *exactly* on `t_limit` when it reaches it. All work buffers are allocated
+//! in [`Integrator::new`]; stepping allocates nothing.
+
+use std::fmt;
+
+/// A system of first-order ODEs `x' = f(t, x)`.
+///
+/// `&mut self` because evaluating `f` for a block diagram means computing the
+/// outputs of its continuous blocks, which write into the diagram's signal
+/// buffer.
+pub trait OdeSystem {
+    /// Writes `f(t, x)` into `dx` (same length as `x`).
+    fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]);
+}
+
+/// Integration method and its options.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    /// Forward Euler, order 1, fixed step.
+    Euler { step: f64 },
+    /// Heun's method (explicit trapezoid), order 2, fixed step.
+    Heun { step: f64 },
+    /// Classic Runge–Kutta, order 4, fixed step.
+    Rk4 { step: f64 },
+    /// Dormand–Prince 5(4) with local extrapolation (MATLAB's `ode45`).
+    /// Error per component is scaled by `atol + rtol·max(|x|, |x_new|)` and
+    /// the RMS of the scaled errors must not exceed 1.
+    DormandPrince {
+        rtol: f64,
+        atol: f64,
+        max_step: f64,
+        /// First trial step; `None` picks one (Hairer, Nørsett & Wanner, II.4).
+        initial_step: Option<f64>,
+    },
+}
+
+impl Method {
+    /// The largest step the simulator may ask for in one major step.
+    pub fn max_step(&self) -> f64 {
+        match *self {
+            Method::Euler { step } | Method::Heun { step } | Method::Rk4 { step } => step,
+            Method::DormandPrince { max_step, .. } => max_step,
+        }
+    }
+
+    /// Whether the method chooses its own step sizes.
+    pub fn is_adaptive(&self) -> bool {
+        matches!(self, Method::DormandPrince { .. })
+    }
+
+    /// Short name, as written in graph files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Euler { .. } => "euler",
+            Method::Heun { .. } => "heun",
+            Method::Rk4 { .. } => "rk4",
+            Method::DormandPrince { .. } => "dopri5",
+        }
+    }
+}
+
+/// Work counters, reported in run reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Accepted steps.
+    pub steps: u64,
+    /// Steps rejected by error control (adaptive method only).
+    pub rejected: u64,
+    /// Evaluations of `f`.
+    pub evaluations: u64,
+}
+
+/// Why integration could not continue.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SolverError {
+    /// The adaptive step shrank below what floating point can resolve at `t`.
+    StepTooSmall { t: f64, step: f64 },
+    /// The error estimate was not finite (the state blew up) at `t`.
+    NonFinite { t: f64 },
+}
+
+impl fmt::Display for SolverError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SolverError::StepTooSmall { t, step } => write!(
+                f,
+                "step size {step:e} too small at t = {t}: the system is too stiff or discontinuous for the tolerances"
+            ),
+            SolverError::NonFinite { t } => write!(f, "state is not finite at t = {t}"),
+        }
+    }
+}
+
+impl std::error::Error for SolverError {}
+
+// Dormand–Prince 5(4) tableau (Dormand & Prince 1980; Hairer, Nørsett &
+// Wanner, Solving ODEs I, table II.5.2).
+const C2: f64 = 1.0 / 5.0;
+const C3: f64 = 3.0 / 10.0;
+const C4: f64 = 4.0 / 5.0;
+const C5: f64 = 8.0 / 9.0;
+const A21: f64 = 1.0 / 5.0;
+const A31: f64 = 3.0 / 40.0;
+const A32: f64 = 9.0 / 40.0;
+const A41: f64 = 44.0 / 45.0;
+const A42: f64 = -56.0 / 15.0;
+const A43: f64 = 32.0 / 9.0;
+const A51: f64 = 19372.0 / 6561.0;
+const A52: f64 = -25360.0 / 2187.0;
+const A53: f64 = 64448.0 / 6561.0;
+const A54: f64 = -212.0 / 729.0;
+const A61: f64 = 9017.0 / 3168.0;
+const A62: f64 = -355.0 / 33.0;
+const A63: f64 = 46732.0 / 5247.0;
+const A64: f64 = 49.0 / 176.0;
+const A65: f64 = -5103.0 / 18656.0;
+const A71: f64 = 35.0 / 384.0;
+const A73: f64 = 500.0 / 1113.0;
+const A74: f64 = 125.0 / 192.0;
+const A75: f64 = -2187.0 / 6784.0;
+const A76: f64 = 11.0 / 84.0;
+// Difference between the 5th- and 4th-order weights.
+const E1: f64 = 71.0 / 57600.0;
+const E3: f64 = -71.0 / 16695.0;
+const E4: f64 = 71.0 / 1920.0;
+const E5: f64 = -17253.0 / 339200.0;
+const E6: f64 = 22.0 / 525.0;
+const E7: f64 = -1.0 / 40.0;
+
+/// A stepper with preallocated stage buffers for a system of fixed size.
+pub struct Integrator {
+    method: Method,
+    k: [Vec<f64>; 7],
+    tmp: Vec<f64>,
+    x_new: Vec<f64>,
+    /// Next trial step of the adaptive method (0 = not chosen yet).
+    h_next: f64,
+    /// `k[0]` holds `f(t, x)` from the last accepted step (first same as last).
+    fsal_valid: bool,
+    stats: Stats,
+}
+
+impl Integrator {
+    /// Allocates the stage buffers for `n` states.
+    pub fn new(method: Method, n: usize) -> Self {
+        Integrator {
+            method,
+            k: std::array::from_fn(|_| vec![0.0; n]),
+            tmp: vec![0.0; n],
+            x_new: vec![0.0; n],
+            h_next: 0.0,
+            fsal_valid: false,
+            stats: Stats::default(),
+        }
+    }
+
+    pub fn method(&self) -> Method {
+        self.method
+    }
+
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// Tells the adaptive method that `f` changed discontinuously at the
+    /// current time (a sample hit or an event), so the derivative cached from
+    /// the previous step must not be reused.
+    pub fn invalidate(&mut self) {
+        self.fsal_valid = false;
+    }
+
+    /// Advances `x` from `t` towards `t_limit` and returns the new time.
+    ///
+    /// Fixed-step methods take one step of size `t_limit - t` (the caller
+    /// keeps it at most the configured step). The adaptive method takes one
+    /// accepted step, no longer than `max_step`, and returns `t_limit` itself
+    /// (bit for bit) when it lands there.
+    pub fn advance(
+        &mut self,
+        sys: &mut dyn OdeSystem,
+        t: f64,
+        t_limit: f64,
+        x: &mut [f64],
+    ) -> Result<f64, SolverError> {
+        if x.is_empty() || t_limit <= t {
+            return Ok(t_limit.max(t));
+        }
+        let h = t_limit - t;
+        match self.method {
+            Method::Euler { .. } => self.euler(sys, t, h, x),
+            Method::Heun { .. } => self.heun(sys, t, h, x),
+            Method::Rk4 { .. } => self.rk4(sys, t, h, x),
+            Method::DormandPrince {
+                rtol,
+                atol,
+                max_step,
+                initial_step,
+            } => return self.dopri5(sys, t, t_limit, x, rtol, atol, max_step, initial_step),
+        }
+        self.stats.steps += 1;
+        Ok(t_limit)
+    }
+
+    fn eval(&mut self, sys: &mut dyn OdeSystem, stage: usize, t: f64, from_tmp: bool, x: &[f64]) {
+        self.stats.evaluations += 1;
+        let src = if from_tmp { &self.tmp[..] } else { x };
+        sys.derivatives(t, src, &mut self.k[stage]);
+    }
+
+    fn euler(&mut self, sys: &mut dyn OdeSystem, t: f64, h: f64, x: &mut [f64]) {
+        self.eval(sys, 0, t, false, x);
+        for (xi, ki) in x.iter_mut().zip(&self.k[0]) {
+            *xi += h * ki;
+        }
+    }
+
+    fn heun(&mut self, sys: &mut dyn OdeSystem, t: f64, h: f64, x: &mut [f64]) {
+        self.eval(sys, 0, t, false, x);
+        self.stage(x, h, &[(0, 1.0)]);
+        self.eval(sys, 1, t + h, true, x);
+        for i in 0..x.len() {
+            x[i] += 0.5 * h * (self.k[0][i] + self.k[1][i]);
+        }
+    }
+
+    fn rk4(&mut self, sys: &mut dyn OdeSystem, t: f64, h: f64, x: &mut [f64]) {
+        self.eval(sys, 0, t, false, x);
+        self.stage(x, h, &[(0, 0.5)]);
+        self.eval(sys, 1, t + 0.5 * h, true, x);
+        self.stage(x, h, &[(1, 0.5)]);
+        self.eval(sys, 2, t + 0.5 * h, true, x);
+        self.stage(x, h, &[(2, 1.0)]);
+        self.eval(sys, 3, t + h, true, x);
+        let k = &self.k;
+        for i in 0..x.len() {
+            x[i] += h / 6.0 * (k[0][i] + 2.0 * k[1][i] + 2.0 * k[2][i] + k[3][i]);
+        }
+    }
+
+    /// `tmp = x + h · Σ a_j k_j`.
+    fn stage(&mut self, x: &[f64], h: f64, terms: &[(usize, f64)]) {
+        for i in 0..x.len() {
+            let mut s = 0.0;
+            for &(j, a) in terms {
+                s += a * self.k[j][i];
+            }
+            self.tmp[i] = x[i] + h * s;
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn dopri5(
+        &mut self,
+        sys: &mut dyn OdeSystem,
+        t: f64,
+        t_limit: f64,
+        x: &mut [f64],
+        rtol: f64,
+        atol: f64,
+        max_step: f64,
+        initial_step: Option<f64>,
+    ) -> Result<f64, SolverError> {
+        if !self.fsal_valid {
+            self.eval(sys, 0, t, false, x);
+            self.fsal_valid = true;
+        }
+        if self.h_next <= 0.0 {
+            self.h_next = match initial_step {
+                Some(h) => h,
+                None => self.initial_step(sys, t, x, rtol, atol, max_step),
+            };
+        }
+        let span = t_limit - t;
+        let mut h = self.h_next.min(max_step);
+        loop {
+            // Land exactly on the limit when it is within reach (or nearly:
+            // a sliver of a step left over would waste a whole step later).
+            let landing = h >= span * (1.0 - 1e-9) || span - h < 0.01 * h;
+            if landing {
+                h = span;
+            }
+            let t_new = if landing { t_limit } else { t + h };
+            if t + h == t {
+                return Err(SolverError::StepTooSmall { t, step: h });
+            }
+            self.stage(x, h, &[(0, A21)]);
+            self.eval(sys, 1, t + C2 * h, true, x);
+            self.stage(x, h, &[(0, A31), (1, A32)]);
+            self.eval(sys, 2, t + C3 * h, true, x);
+            self.stage(x, h, &[(0, A41), (1, A42), (2, A43)]);
+            self.eval(sys, 3, t + C4 * h, true, x);
+            self.stage(x, h, &[(0, A51), (1, A52), (2, A53), (3, A54)]);
+            self.eval(sys, 4, t + C5 * h, true, x);
+            self.stage(x, h, &[(0, A61), (1, A62), (2, A63), (3, A64), (4, A65)]);
+            self.eval(sys, 5, t_new, true, x);
+            self.stage(x, h, &[(0, A71), (2, A73), (3, A74), (4, A75), (5, A76)]);
+            self.x_new.copy_from_slice(&self.tmp);
+            self.stats.evaluations += 1;
+            sys.derivatives(t_new, &self.x_new, &mut self.k[6]);
+
+            let mut sum = 0.0;
+            for i in 0..x.len() {
+                let k = &self.k;
+                let err = h
+                    * (E1 * k[0][i] + E3 * k[2][i] + E4 * k[3][i] + E5 * k[4][i] + E6 * k[5][i]
+                        + E7 * k[6][i]);
+                let scale = atol + rtol * x[i].abs().max(self.x_new[i].abs());
+                sum += (err / scale) * (err / scale);
+            }
+            let err = (sum / x.len() as f64).sqrt();
+            if !err.is_finite() {
+                return Err(SolverError::NonFinite { t });
+            }
+            if err <= 1.0 {
+                let factor = if err == 0.0 { 5.0 } else { (0.9 * err.powf(-0.2)).clamp(0.2, 5.0) };
+                // A step cut short to land on the limit says nothing about
+                // the step the dynamics allow: keep the larger proposal.
+                let proposal = (h * factor).min(max_step);
+                self.h_next = if landing { proposal.max(self.h_next) } else { proposal };
+                x.copy_from_slice(&self.x_new);
+                self.k.swap(0, 6);
+                self.stats.steps += 1;
+                return Ok(t_new);
+            }
+            self.stats.rejected += 1;
+            h *= (0.9 * err.powf(-0.2)).clamp(0.2, 1.0);
+        }
+    }
+
+    /// Starting step size after Hairer, Nørsett & Wanner I, II.4 (the
+    /// algorithm MATLAB and SciPy use), from `k[0] = f(t, x)`.
+    fn initial_step(
+        &mut self,
+        sys: &mut dyn OdeSystem,
+        t: f64,
+        x: &[f64],
+        rtol: f64,
+        atol: f64,
+        max_step: f64,
+    ) -> f64 {
+        let n = x.len() as f64;
+        let (mut d0, mut d1) = (0.0, 0.0);
+        for i in 0..x.len() {
+            let sc = atol + rtol * x[i].abs();
+            d0 += (x[i] / sc).powi(2);
+            d1 += (self.k[0][i] / sc).powi(2);
+        }
+        let (d0, d1) = ((d0 / n).sqrt(), (d1 / n).sqrt());
+        let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
+        let h0 = h0.min(max_step);
+        self.stage(x, h0, &[(0, 1.0)]);
+        self.eval(sys, 1, t + h0, true, x);
+        let mut d2 = 0.0;
+        for i in 0..x.len() {
+            let sc = atol + rtol * x[i].abs();
+            d2 += ((self.k[1][i] - self.k[0][i]) / sc).powi(2);
+        }
+        let d2 = (d2 / n).sqrt() / h0;
+        let h1 = if d1.max(d2) <= 1e-15 {
+            (h0 * 1e-3).max(1e-6)
+        } else {
+            (0.01 / d1.max(d2)).powf(0.2)
+        };
+        (100.0 * h0).min(h1).min(max_step)
+    }
+}
+
+#[cfg(test)]
+mod tests;

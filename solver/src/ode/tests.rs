@@ -1,0 +1,125 @@
+use super::*;
+
+/// Harmonic oscillator x'' = -x, x(0) = 1, x'(0) = 0: x = cos t.
+struct Oscillator;
+impl OdeSystem for Oscillator {
+    fn derivatives(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) {
+        dx[0] = x[1];
+        dx[1] = -x[0];
+    }
+}
+
+/// Global error at t = 2 with `n` equal steps.
+fn global_error(method: Method, n: usize) -> f64 {
+    let mut integ = Integrator::new(method, 2);
+    let mut x = [1.0, 0.0];
+    let h = 2.0 / n as f64;
+    let mut t = 0.0;
+    for k in 1..=n {
+        let limit = k as f64 * h;
+        t = integ.advance(&mut Oscillator, t, limit, &mut x).unwrap();
+        assert_eq!(t, limit);
+    }
+    ((x[0] - 2f64.cos()).powi(2) + (x[1] + 2f64.sin()).powi(2)).sqrt()
+}
+
+/// Observed order from halving the step: log2(e(h) / e(h/2)).
+fn observed_order(make: impl Fn(f64) -> Method, n: usize) -> f64 {
+    let e1 = global_error(make(2.0 / n as f64), n);
+    let e2 = global_error(make(1.0 / n as f64), 2 * n);
+    (e1 / e2).log2()
+}
+
+#[test]
+fn fixed_step_methods_converge_at_their_order() {
+    let euler = observed_order(|step| Method::Euler { step }, 400);
+    let heun = observed_order(|step| Method::Heun { step }, 100);
+    let rk4 = observed_order(|step| Method::Rk4 { step }, 20);
+    assert!((euler - 1.0).abs() < 0.05, "euler order {euler}");
+    assert!((heun - 2.0).abs() < 0.05, "heun order {heun}");
+    assert!((rk4 - 4.0).abs() < 0.1, "rk4 order {rk4}");
+}
+
+#[test]
+fn dormand_prince_is_fifth_order_at_fixed_step() {
+    // Huge tolerances and a pinned step make every step accepted at size h.
+    let pinned = |step: f64| Method::DormandPrince {
+        rtol: 1e9,
+        atol: 1e9,
+        max_step: step,
+        initial_step: Some(step),
+    };
+    let order = observed_order(pinned, 10);
+    assert!((order - 5.0).abs() < 0.25, "dopri5 order {order}");
+}
+
+#[test]
+fn dormand_prince_meets_tolerance_and_lands_exactly() {
+    let method = Method::DormandPrince { rtol: 1e-8, atol: 1e-10, max_step: 1.0, initial_step: None };
+    let mut integ = Integrator::new(method, 2);
+    let mut x = [1.0, 0.0];
+    let mut t = 0.0;
+    // Sample hits at multiples of 0.3, which are not representable exactly.
+    let hits: Vec<f64> = (1..=10).map(|k| k as f64 * 0.3).collect();
+    for &hit in &hits {
+        while t < hit {
+            t = integ.advance(&mut Oscillator, t, hit, &mut x).unwrap();
+        }
+        assert_eq!(t.to_bits(), hit.to_bits(), "landed at {t}, hit {hit}");
+        integ.invalidate();
+    }
+    let err = (x[0] - 3f64.cos()).abs().max((x[1] + 3f64.sin()).abs());
+    assert!(err < 1e-7, "error {err}");
+    let stats = integ.stats();
+    assert!(stats.steps >= 10 && stats.evaluations >= 6 * stats.steps, "{stats:?}");
+}
+
+#[test]
+fn dormand_prince_rejects_steps_across_a_kink() {
+    // x' = 1 for t < 1, then x' = -50 x: a discontinuous right-hand side.
+    struct Kink;
+    impl OdeSystem for Kink {
+        fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+            dx[0] = if t < 1.0 { 1.0 } else { -50.0 * x[0] };
+        }
+    }
+    let method = Method::DormandPrince { rtol: 1e-6, atol: 1e-9, max_step: 0.5, initial_step: None };
+    let mut integ = Integrator::new(method, 1);
+    let (mut t, mut x) = (0.0, [0.0]);
+    while t < 2.0 {
+        t = integ.advance(&mut Kink, t, 2.0, &mut x).unwrap();
+    }
+    let exact = (-50.0f64).exp();
+    assert!((x[0] - exact).abs() < 1e-6, "x = {} vs {exact}", x[0]);
+    assert!(integ.stats().rejected > 0);
+}
+
+#[test]
+fn empty_system_jumps_to_the_limit() {
+    let mut integ = Integrator::new(Method::Rk4 { step: 0.1 }, 0);
+    let t = integ.advance(&mut Oscillator, 0.0, 0.1, &mut []).unwrap();
+    assert_eq!(t, 0.1);
+    assert_eq!(integ.stats().evaluations, 0);
+}
+
+#[test]
+fn blow_up_is_reported_not_looped_on() {
+    struct Blow;
+    impl OdeSystem for Blow {
+        fn derivatives(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) {
+            dx[0] = x[0] * x[0];
+        }
+    }
+    let method = Method::DormandPrince { rtol: 1e-6, atol: 1e-9, max_step: 1.0, initial_step: None };
+    let mut integ = Integrator::new(method, 1);
+    let (mut t, mut x) = (0.0, [1.0]);
+    let mut result = Ok(0.0);
+    while t < 2.0 && result.is_ok() {
+        result = integ.advance(&mut Blow, t, 2.0, &mut x);
+        if let Ok(tn) = result {
+            t = tn;
+        }
+    }
+    assert!(result.is_err(), "x = 1/(1-t) must blow up near t = 1, got t = {t}");
+    assert!(t < 1.001, "t = {t}, x = {:?}, {result:?}", x);
+}

@@ -1,0 +1,63 @@
+//! Real polynomials in descending powers (`[1, 3, 2]` is s² + 3s + 2),
+//! the convention of MATLAB's `tf` and of our graph files.
+
+use nalgebra::Complex;
+
+/// The polynomial without its leading zero coefficients.
+pub fn trim_leading_zeros(p: &[f64]) -> &[f64] {
+    let first = p.iter().position(|&c| c != 0.0).unwrap_or(p.len());
+    &p[first..]
+}
+
+/// Degree of a polynomial (`None` for the zero polynomial).
+pub fn degree(p: &[f64]) -> Option<usize> {
+    let p = trim_leading_zeros(p);
+    (!p.is_empty()).then(|| p.len() - 1)
+}
+
+/// Evaluates the polynomial at `x` (Horner).
+pub fn eval(p: &[f64], x: f64) -> f64 {
+    p.iter().fold(0.0, |acc, &c| acc * x + c)
+}
+
+/// The monic real polynomial with the given roots. Complex roots must come
+/// in conjugate pairs; the imaginary residue is checked, not silently dropped.
+pub fn from_roots(roots: &[Complex<f64>]) -> Result<Vec<f64>, String> {
+    let mut coeffs = vec![Complex::new(1.0, 0.0)];
+    for &r in roots {
+        coeffs.push(Complex::new(0.0, 0.0));
+        for i in (1..coeffs.len()).rev() {
+            let prev = coeffs[i - 1];
+            coeffs[i] -= r * prev;
+        }
+    }
+    let scale = coeffs.iter().map(|c| c.norm()).fold(1.0, f64::max);
+    if let Some(c) = coeffs.iter().find(|c| c.im.abs() > 1e-9 * scale) {
+        return Err(format!(
+            "complex roots must come in conjugate pairs (a coefficient has imaginary part {:e})",
+            c.im
+        ));
+    }
+    Ok(coeffs.iter().map(|c| c.re).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn roots_to_coefficients() {
+        let p = from_roots(&[Complex::new(-1.0, 0.0), Complex::new(-2.0, 0.0)]).unwrap();
+        assert_eq!(p, vec![1.0, 3.0, 2.0]);
+        let q = from_roots(&[Complex::new(-1.0, 2.0), Complex::new(-1.0, -2.0)]).unwrap();
+        assert_eq!(q, vec![1.0, 2.0, 5.0]);
+        assert!(from_roots(&[Complex::new(0.0, 1.0)]).is_err());
+    }
+
+    #[test]
+    fn degree_and_horner() {
+        assert_eq!(degree(&[0.0, 0.0, 2.0, 1.0]), Some(1));
+        assert_eq!(degree(&[0.0]), None);
+        assert_eq!(eval(&[1.0, 3.0, 2.0], 2.0), 12.0);
+    }
+}
