@@ -1,1 +1,26 @@
-pub fn _x(){}
+//! ctlgraph's graph model: loading YAML graph files with positions,
+//! evaluating parameters, expanding subsystems, compiling to a sorted
+//! dataflow [`Model`] and simulating it with Simulink's semantics.
+//!
+//! The flow: text → [`spec::GraphFile`] → [`flatten::load`] (parameters,
+//! subsystems) → [`compile::compile`] (blocks from a [`Registry`], wiring,
+//! widths, rates, execution order) → [`sim::Simulator`].
+
+pub mod block;
+pub mod compile;
+pub mod diag;
+pub mod expr;
+pub mod flatten;
+pub mod params;
+pub mod registry;
+pub mod sim;
+pub mod spec;
+pub mod yaml;
+
+pub use block::{Block, Interface, Io, SampleTime, Width};
+pub use compile::{Model, compile};
+pub use diag::{Diagnostic, Pos};
+pub use flatten::{FlatGraph, SimConfig, load, load_str};
+pub use params::Params;
+pub use registry::{BlockType, Built, ParamDoc, PortDoc, Registry};
+pub use sim::{RunStats, SimError, Simulator};

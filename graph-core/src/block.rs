@@ -1,0 +1,230 @@
+//! The block trait: what every block in the library implements, and the
+//! view of the signal buffer a block gets when it runs.
+//!
+//! The simulator calls, per major step (Simulink semantics):
+//! 1. [`Block::output`] in execution order — continuous blocks at every major
+//!    and minor step, discrete blocks only at their sample hits (their
+//!    outputs hold in between), constant blocks once;
+//! 2. (the recorder samples the signals);
+//! 3. [`Block::update`] — discrete blocks at their hits, continuous blocks at
+//!    every major step (for memory such as a rate limiter's last output);
+//! 4. integration of continuous states via [`Block::derivatives`], the
+//!    solver's minor steps calling `output` of continuous blocks again.
+
+use std::fmt;
+
+/// When a block runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SampleTime {
+    /// At every major and minor step.
+    Continuous,
+    /// At `offset + k·period`, k = 0, 1, 2, …; output held in between.
+    Discrete { period: f64, offset: f64 },
+    /// Takes the rate of the blocks driving it.
+    Inherited,
+    /// Output computed once, at the start.
+    Constant,
+}
+
+impl fmt::Display for SampleTime {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SampleTime::Continuous => f.write_str("continuous"),
+            SampleTime::Discrete { period, offset } if *offset == 0.0 => write!(f, "discrete {period}"),
+            SampleTime::Discrete { period, offset } => write!(f, "discrete {period} offset {offset}"),
+            SampleTime::Inherited => f.write_str("inherited"),
+            SampleTime::Constant => f.write_str("constant"),
+        }
+    }
+}
+
+/// The width of a port.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Width {
+    Fixed(usize),
+    /// The block's common width, resolved from its neighbours at compile
+    /// time (elementwise blocks work on any width). An input of common
+    /// width also accepts a scalar, which is broadcast.
+    Common,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct InputPort {
+    pub name: String,
+    pub width: Width,
+    /// Whether the block's output at a step depends on this input at the
+    /// same step. Only such edges order blocks and can form algebraic loops.
+    pub feedthrough: bool,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputPort {
+    pub name: String,
+    pub width: Width,
+}
+
+/// A block's ports and rate, fixed when it is built.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Interface {
+    pub inputs: Vec<InputPort>,
+    pub outputs: Vec<OutputPort>,
+    pub sample_time: SampleTime,
+}
+
+impl Interface {
+    pub fn new(sample_time: SampleTime) -> Self {
+        Interface { inputs: Vec::new(), outputs: Vec::new(), sample_time }
+    }
+
+    /// Adds an input port.
+    pub fn input(mut self, name: &str, width: Width, feedthrough: bool) -> Self {
+        self.inputs.push(InputPort { name: name.to_string(), width, feedthrough });
+        self
+    }
+
+    /// Adds an output port.
+    pub fn output(mut self, name: &str, width: Width) -> Self {
+        self.outputs.push(OutputPort { name: name.to_string(), width });
+        self
+    }
+
+    /// Whether any port takes the common width.
+    pub fn has_common_width(&self) -> bool {
+        self.inputs.iter().any(|p| p.width == Width::Common) || self.outputs.iter().any(|p| p.width == Width::Common)
+    }
+}
+
+/// Where a port's values live in the signal buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Port {
+    pub offset: usize,
+    pub width: usize,
+}
+
+/// A block's window on the simulation: time, its continuous states, its
+/// inputs and outputs. Built by the simulator for each call; holds only
+/// borrowed slices.
+pub struct Io<'a> {
+    /// Simulation time.
+    pub t: f64,
+    /// This block's continuous states (empty for blocks without any).
+    pub x: &'a [f64],
+    left_limit: bool,
+    signals: &'a mut [f64],
+    inputs: &'a [Port],
+    outputs: &'a [Port],
+}
+
+impl<'a> Io<'a> {
+    pub fn new(
+        t: f64,
+        left_limit: bool,
+        x: &'a [f64],
+        signals: &'a mut [f64],
+        inputs: &'a [Port],
+        outputs: &'a [Port],
+    ) -> Self {
+        Io { t, x, left_limit, signals, inputs, outputs }
+    }
+
+    /// All elements of input `port`.
+    #[inline]
+    pub fn input(&self, port: usize) -> &[f64] {
+        let p = self.inputs[port];
+        &self.signals[p.offset..p.offset + p.width]
+    }
+
+    /// The first (for scalars: the only) element of input `port`.
+    #[inline]
+    pub fn u(&self, port: usize) -> f64 {
+        self.signals[self.inputs[port].offset]
+    }
+
+    /// Element `k` of input `port`, broadcasting a scalar input.
+    #[inline]
+    pub fn u_at(&self, port: usize, k: usize) -> f64 {
+        let p = self.inputs[port];
+        self.signals[p.offset + if p.width == 1 { 0 } else { k }]
+    }
+
+    pub fn input_width(&self, port: usize) -> usize {
+        self.inputs[port].width
+    }
+
+    /// All elements of output `port`, to write.
+    #[inline]
+    pub fn output(&mut self, port: usize) -> &mut [f64] {
+        let p = self.outputs[port];
+        &mut self.signals[p.offset..p.offset + p.width]
+    }
+
+    /// Sets the first (for scalars: the only) element of output `port`.
+    #[inline]
+    pub fn set(&mut self, port: usize, value: f64) {
+        self.signals[self.outputs[port].offset] = value;
+    }
+
+    /// Sets element `k` of output `port`.
+    #[inline]
+    pub fn set_at(&mut self, port: usize, k: usize, value: f64) {
+        self.signals[self.outputs[port].offset + k] = value;
+    }
+
+    /// The current value of output `port` (what the block last wrote).
+    #[inline]
+    pub fn y(&self, port: usize) -> f64 {
+        self.signals[self.outputs[port].offset]
+    }
+
+    pub fn output_width(&self, port: usize) -> usize {
+        self.outputs[port].width
+    }
+
+    /// Whether time has reached `t_event`. At the end of an integration
+    /// interval that lands on an event, the solver's last stage sees the
+    /// left limit (not yet reached); the major step at the event sees it
+    /// reached. Sources with discontinuities (step, pulse) use this so that
+    /// the jump falls exactly between two steps.
+    #[inline]
+    pub fn reached(&self, t_event: f64) -> bool {
+        self.t > t_event || (self.t == t_event && !self.left_limit)
+    }
+}
+
+/// A block of the library. See the module docs for when each method runs.
+pub trait Block: Send {
+    /// Receives the resolved common width (only called for blocks with a
+    /// [`Width::Common`] port), before any other call. Allocate here.
+    fn set_width(&mut self, _width: usize) -> Result<(), String> {
+        Ok(())
+    }
+
+    /// Number of continuous states (after `set_width`).
+    fn num_states(&self) -> usize {
+        0
+    }
+
+    /// Resets discrete state and writes the initial continuous states.
+    fn initialize(&mut self, _x0: &mut [f64]) {}
+
+    /// Computes the outputs from the inputs, `io.x` and discrete state.
+    fn output(&mut self, io: &mut Io);
+
+    /// Advances discrete state (or major-step memory) after outputs.
+    fn update(&mut self, _io: &mut Io) {}
+
+    /// Writes the derivatives of the continuous states.
+    fn derivatives(&mut self, _io: &Io, _dx: &mut [f64]) {}
+
+    /// Projects continuous states back into their admissible set (limited
+    /// integrators) after an accepted step; returns whether anything moved.
+    fn clamp_states(&self, _x: &mut [f64]) -> bool {
+        false
+    }
+
+    /// The first time strictly after `t` at which the output jumps, so the
+    /// simulator can put a major step exactly there.
+    fn next_event(&self, _t: f64) -> f64 {
+        f64::INFINITY
+    }
+}

@@ -1,0 +1,377 @@
+//! Loading a graph: reading files, evaluating parameters (with `--set`
+//! overrides), reading the simulation settings, and expanding subsystems
+//! into one flat list of blocks named `outer/inner`.
+
+use crate::diag::{Diagnostic, Pos};
+use crate::params::eval_number;
+use crate::spec::{BlockSpec, Endpoint, GraphFile};
+use crate::yaml::{self, Key, Kind, Yaml};
+use ctlgraph_solver::Method;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Block types the loader and compiler treat specially.
+pub const SUBSYSTEM: &str = "subsystem";
+pub const INPORT: &str = "inport";
+pub const OUTPORT: &str = "outport";
+
+/// Simulation settings of the top-level graph.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimConfig {
+    pub stop: f64,
+    pub method: Method,
+    pub seed: u64,
+}
+
+/// A block after expansion, with the parameters its file defines.
+#[derive(Clone, Debug)]
+pub struct FlatBlock {
+    /// Full name: `name`, or `sub/name` inside subsystem `sub`.
+    pub path: String,
+    pub spec: BlockSpec,
+    pub scope: Arc<Vec<(String, f64)>>,
+    pub dir: Arc<PathBuf>,
+}
+
+/// A wire between flat blocks; positions are where its ends are written.
+#[derive(Clone, Debug)]
+pub struct FlatWire {
+    pub src: Endpoint,
+    pub dst: Endpoint,
+}
+
+/// The whole diagram, one level deep.
+#[derive(Clone, Debug)]
+pub struct FlatGraph {
+    pub file: Arc<str>,
+    pub name: Option<String>,
+    pub description: Option<String>,
+    /// Top-level parameters after overrides.
+    pub parameters: Vec<(String, f64)>,
+    pub sim: SimConfig,
+    pub blocks: Vec<FlatBlock>,
+    pub wires: Vec<FlatWire>,
+    pub records: Vec<(String, Endpoint)>,
+    pub record_every: usize,
+    /// Subsystem path → its (inports, outports), for resolving records.
+    pub subsystems: HashMap<String, (Vec<String>, Vec<String>)>,
+}
+
+enum Override {
+    /// From the command line: an expression over the earlier parameters.
+    Text(String),
+    /// From a subsystem block, already evaluated in the outer scope.
+    Value(f64),
+}
+
+/// Reads and expands the graph at `path`. `overrides` are `--set NAME=VALUE`
+/// pairs; naming a parameter the graph does not have is an error.
+pub fn load(path: &Path, overrides: &[(String, String)]) -> Result<FlatGraph, Diagnostic> {
+    let file: Arc<str> = path.display().to_string().into();
+    let text = std::fs::read_to_string(path).map_err(|e| Diagnostic::in_file(&file, format!("cannot read: {e}")))?;
+    load_str(&text, file, overrides)
+}
+
+/// Like [`load`] for text already in memory; `file` names it in messages
+/// and locates relative paths.
+pub fn load_str(text: &str, file: Arc<str>, overrides: &[(String, String)]) -> Result<FlatGraph, Diagnostic> {
+    let graph = GraphFile::parse(text, file.clone())?;
+    let known: Vec<&str> = graph.parameters.iter().map(|(k, _)| k.name.as_str()).collect();
+    for (name, _) in overrides {
+        if !known.contains(&name.as_str()) {
+            return Err(Diagnostic::plain(format!("--set {name}: {file} has no parameter `{name}`"))
+                .suggest(name, known.iter().copied()));
+        }
+    }
+    let ovr: Vec<(String, Override, Option<Pos>)> =
+        overrides.iter().map(|(n, v)| (n.clone(), Override::Text(v.clone()), None)).collect();
+    let scope = Arc::new(eval_parameters(&graph.parameters, &ovr)?);
+    let sim = sim_config(graph.simulation.as_ref(), &scope)?;
+    let dir = Arc::new(Path::new(&*file).parent().map(Path::to_path_buf).unwrap_or_default());
+    let mut out = FlatGraph {
+        file: file.clone(),
+        name: graph.name.clone(),
+        description: graph.description.clone(),
+        parameters: scope.to_vec(),
+        sim,
+        blocks: Vec::new(),
+        wires: Vec::new(),
+        records: Vec::new(),
+        record_every: graph.record_every.as_ref().map_or(1, |e| e.0),
+        subsystems: HashMap::new(),
+    };
+    let mut stack = vec![canonical(Path::new(&*file))];
+    expand(&graph, "", scope, dir, &mut out, &mut stack)?;
+    for rec in &graph.record {
+        out.records.push((rec.name.clone(), rec.signal.clone()));
+    }
+    Ok(out)
+}
+
+fn canonical(p: &Path) -> PathBuf {
+    p.canonicalize().unwrap_or_else(|_| p.to_path_buf())
+}
+
+fn eval_parameters(
+    defs: &[(Key, Yaml)],
+    overrides: &[(String, Override, Option<Pos>)],
+) -> Result<Vec<(String, f64)>, Diagnostic> {
+    let mut scope: Vec<(String, f64)> = Vec::new();
+    for (key, value) in defs {
+        let v = match overrides.iter().find(|(n, _, _)| *n == key.name) {
+            Some((_, Override::Value(v), _)) => *v,
+            Some((name, Override::Text(text), _)) => {
+                let at = Pos::new(format!("--set {name}=").into(), 1, 1);
+                eval_number(text, &at, &scope).map_err(|d| {
+                    Diagnostic::plain(format!("--set {name}={text}: {}", d.message)).with_hint(d.hint.unwrap_or_default())
+                })?
+            }
+            None => match &value.kind {
+                Kind::Num(v) => *v,
+                Kind::Str(s) => eval_number(s, &value.pos, &scope).map_err(|d| Diagnostic {
+                    message: format!("parameter `{}`: {}", key.name, d.message),
+                    ..d
+                })?,
+                _ => {
+                    return Err(Diagnostic::at(
+                        &value.pos,
+                        format!("parameter `{}` must be a number or an expression, found {}", key.name, value.describe()),
+                    ));
+                }
+            },
+        };
+        scope.push((key.name.clone(), v));
+    }
+    Ok(scope)
+}
+
+const SIM_KEYS: [&str; 3] = ["stop", "solver", "seed"];
+const SOLVER_KEYS: [&str; 6] = ["method", "step", "rtol", "atol", "max_step", "initial_step"];
+const METHODS: [&str; 4] = ["dopri5", "rk4", "heun", "euler"];
+
+fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, Diagnostic> {
+    let entries = match sim {
+        Some(s) => s.expect_map("`simulation`")?,
+        None => &[],
+    };
+    check_keys(entries, &SIM_KEYS, "simulation")?;
+    let num = |v: &Yaml, what: &str| -> Result<f64, Diagnostic> {
+        match &v.kind {
+            Kind::Num(x) => Ok(*x),
+            Kind::Str(s) => eval_number(s, &v.pos, scope),
+            _ => Err(Diagnostic::at(&v.pos, format!("{what} must be a number, found {}", v.describe()))),
+        }
+    };
+    let positive = |v: &Yaml, what: &str| -> Result<f64, Diagnostic> {
+        let x = num(v, what)?;
+        if x > 0.0 && x.is_finite() {
+            Ok(x)
+        } else {
+            Err(Diagnostic::at(&v.pos, format!("{what} must be a positive number, got {x}")))
+        }
+    };
+    let stop = match yaml::lookup(entries, "stop") {
+        Some(v) => positive(v, "`simulation.stop`")?,
+        None => 10.0,
+    };
+    let seed = match yaml::lookup(entries, "seed") {
+        Some(v) => {
+            let s = num(v, "`simulation.seed`")?;
+            if s < 0.0 || s.fract() != 0.0 || s > 9.0e15 {
+                return Err(Diagnostic::at(&v.pos, format!("`seed` must be a whole number >= 0, got {s}")));
+            }
+            s as u64
+        }
+        None => 0,
+    };
+    let (method_name, method_pos, solver_entries): (&str, Option<Pos>, &[(Key, Yaml)]) =
+        match yaml::lookup(entries, "solver") {
+            None => ("dopri5", None, &[]),
+            Some(v) => match &v.kind {
+                Kind::Str(s) => (s.as_str(), Some(v.pos.clone()), &[]),
+                Kind::Map(m) => {
+                    check_keys(m, &SOLVER_KEYS, "simulation.solver")?;
+                    match yaml::lookup(m, "method") {
+                        Some(mv) => (mv.expect_str("`solver.method`")?, Some(mv.pos.clone()), m.as_slice()),
+                        None => ("dopri5", None, m.as_slice()),
+                    }
+                }
+                _ => return Err(Diagnostic::at(&v.pos, "`solver` must be a method name or a mapping")),
+            },
+        };
+    let opt = |key: &str| -> Result<Option<f64>, Diagnostic> {
+        yaml::lookup(solver_entries, key).map(|v| positive(v, &format!("`solver.{key}`"))).transpose()
+    };
+    let fixed_step = |name: &str| -> Result<f64, Diagnostic> {
+        opt("step")?.ok_or_else(|| {
+            let pos = method_pos.clone().unwrap_or_else(|| Pos::new("?".into(), 0, 0));
+            Diagnostic::at(&pos, format!("the fixed-step method `{name}` needs a `step`"))
+                .with_hint(format!("solver: {{ method: {name}, step: 1.0e-4 }}"))
+        })
+    };
+    let method = match method_name {
+        "dopri5" | "ode45" => {
+            if let Some(v) = yaml::lookup(solver_entries, "step") {
+                return Err(Diagnostic::at(&v.pos, "dopri5 chooses its own steps: use `max_step` (or a fixed-step method)"));
+            }
+            Method::DormandPrince {
+                rtol: opt("rtol")?.unwrap_or(1e-6),
+                atol: opt("atol")?.unwrap_or(1e-9),
+                max_step: opt("max_step")?.unwrap_or(stop / 200.0),
+                initial_step: opt("initial_step")?,
+            }
+        }
+        "rk4" => Method::Rk4 { step: fixed_step("rk4")? },
+        "heun" => Method::Heun { step: fixed_step("heun")? },
+        "euler" => Method::Euler { step: fixed_step("euler")? },
+        other => {
+            let pos = method_pos.unwrap_or_else(|| Pos::new("?".into(), 0, 0));
+            return Err(Diagnostic::at(&pos, format!("unknown solver method `{other}`"))
+                .suggest(other, METHODS)
+                .or_hint(format!("methods: {}", METHODS.join(", "))));
+        }
+    };
+    if !method.is_adaptive() {
+        for key in ["rtol", "atol", "max_step", "initial_step"] {
+            if let Some(v) = yaml::lookup(solver_entries, key) {
+                return Err(Diagnostic::at(&v.pos, format!("`{key}` applies to dopri5, not to `{method_name}`")));
+            }
+        }
+    }
+    Ok(SimConfig { stop, method, seed })
+}
+
+fn check_keys(entries: &[(Key, Yaml)], known: &[&str], section: &str) -> Result<(), Diagnostic> {
+    for (k, _) in entries {
+        if !known.contains(&k.name.as_str()) {
+            return Err(Diagnostic::at(&k.pos, format!("unknown key `{}` in `{section}`", k.name))
+                .suggest(&k.name, known.iter().copied())
+                .or_hint(format!("`{section}` takes: {}", known.join(", "))));
+        }
+    }
+    Ok(())
+}
+
+/// A subsystem's ports: the names of its inport and outport blocks, in order.
+fn sub_ports(g: &GraphFile) -> (Vec<String>, Vec<String>) {
+    let of = |ty: &str| g.blocks.iter().filter(|b| b.type_name == ty).map(|b| b.name.clone()).collect();
+    (of(INPORT), of(OUTPORT))
+}
+
+fn expand(
+    g: &GraphFile,
+    prefix: &str,
+    scope: Arc<Vec<(String, f64)>>,
+    dir: Arc<PathBuf>,
+    out: &mut FlatGraph,
+    stack: &mut Vec<PathBuf>,
+) -> Result<(), Diagnostic> {
+    let mut subs: HashMap<&str, (Vec<String>, Vec<String>)> = HashMap::new();
+    for b in &g.blocks {
+        let path = format!("{prefix}{}", b.name);
+        if b.type_name != SUBSYSTEM {
+            out.blocks.push(FlatBlock { path, spec: b.clone(), scope: scope.clone(), dir: dir.clone() });
+            continue;
+        }
+        let inner = load_subsystem(b, &path, &scope, &dir, out, stack)?;
+        subs.insert(&b.name, inner.clone());
+        out.subsystems.insert(path, inner);
+    }
+    let names: Vec<&str> = g.blocks.iter().map(|b| b.name.as_str()).collect();
+    let resolve = |ep: &Endpoint, is_src: bool| -> Result<Endpoint, Diagnostic> {
+        if !names.contains(&ep.block.as_str()) {
+            return Err(Diagnostic::at(&ep.pos, format!("wire: no block named `{}`", ep.block))
+                .suggest(&ep.block, names.iter().copied()));
+        }
+        let Some((ins, outs)) = subs.get(ep.block.as_str()) else {
+            return Ok(Endpoint { block: format!("{prefix}{}", ep.block), ..ep.clone() });
+        };
+        let (ports, side) = if is_src { (outs, "outport") } else { (ins, "inport") };
+        let port = resolve_sub_port(ep, ports, side)?;
+        Ok(Endpoint { block: format!("{prefix}{}/{port}", ep.block), port: None, pos: ep.pos.clone() })
+    };
+    for w in &g.wires {
+        let src = resolve(&w.src, true)?;
+        for d in &w.dsts {
+            out.wires.push(FlatWire { src: src.clone(), dst: resolve(d, false)? });
+        }
+    }
+    Ok(())
+}
+
+/// Which inport/outport block of a subsystem an endpoint means.
+pub fn resolve_sub_port<'a>(ep: &Endpoint, ports: &'a [String], side: &str) -> Result<&'a str, Diagnostic> {
+    match &ep.port {
+        Some(p) => ports.iter().find(|n| *n == p).map(String::as_str).ok_or_else(|| {
+            Diagnostic::at(&ep.pos, format!("subsystem `{}` has no {side} `{p}`", ep.block))
+                .suggest(p, ports.iter().map(String::as_str))
+        }),
+        None if ports.len() == 1 => Ok(&ports[0]),
+        None => Err(Diagnostic::at(
+            &ep.pos,
+            format!("subsystem `{}` has {} {side}s: name one as `{}.PORT`", ep.block, ports.len(), ep.block),
+        )
+        .with_hint(format!("{side}s: {}", ports.join(", ")))),
+    }
+}
+
+const SUBSYSTEM_KEYS: [&str; 3] = ["type", "file", "parameters"];
+
+fn load_subsystem(
+    b: &BlockSpec,
+    path: &str,
+    scope: &[(String, f64)],
+    dir: &Path,
+    out: &mut FlatGraph,
+    stack: &mut Vec<PathBuf>,
+) -> Result<(Vec<String>, Vec<String>), Diagnostic> {
+    let what = format!("block `{path}` (subsystem)");
+    check_keys(&b.params, &SUBSYSTEM_KEYS, &what)?;
+    let Some(file_v) = yaml::lookup(&b.params, "file") else {
+        return Err(Diagnostic::at(&b.pos, format!("{what}: missing parameter `file`"))
+            .with_hint("the graph file to include, relative to this file"));
+    };
+    let rel = file_v.expect_str(&format!("{what}: `file`"))?;
+    let sub_path = dir.join(rel);
+    let sub_file: Arc<str> = sub_path.display().to_string().into();
+    let text = std::fs::read_to_string(&sub_path)
+        .map_err(|e| Diagnostic::at(&file_v.pos, format!("{what}: cannot read `{sub_file}`: {e}")))?;
+    let canon = canonical(&sub_path);
+    if stack.contains(&canon) {
+        return Err(Diagnostic::at(&file_v.pos, format!("{what}: `{sub_file}` includes itself")));
+    }
+    let sub = GraphFile::parse(&text, sub_file.clone())?;
+    let known: Vec<&str> = sub.parameters.iter().map(|(k, _)| k.name.as_str()).collect();
+    let mut overrides = Vec::new();
+    if let Some(p) = yaml::lookup(&b.params, "parameters") {
+        for (k, v) in p.expect_map(&format!("{what}: `parameters`"))? {
+            if !known.contains(&k.name.as_str()) {
+                return Err(Diagnostic::at(&k.pos, format!("{what}: `{sub_file}` has no parameter `{}`", k.name))
+                    .suggest(&k.name, known.iter().copied()));
+            }
+            let value = match &v.kind {
+                Kind::Num(x) => *x,
+                Kind::Str(s) => eval_number(s, &v.pos, scope)?,
+                _ => return Err(Diagnostic::at(&v.pos, format!("{what}: parameter `{}` must be a number", k.name))),
+            };
+            overrides.push((k.name.clone(), Override::Value(value), Some(k.pos.clone())));
+        }
+    }
+    let sub_scope = Arc::new(eval_parameters(&sub.parameters, &overrides)?);
+    let sub_dir = Arc::new(sub_path.parent().map(Path::to_path_buf).unwrap_or_default());
+    stack.push(canon);
+    expand(&sub, &format!("{path}/"), sub_scope, sub_dir, out, stack)?;
+    stack.pop();
+    Ok(sub_ports(&sub))
+}
+
+/// Splits a command-line `NAME=VALUE`.
+pub fn parse_set(arg: &str) -> Result<(String, String), Diagnostic> {
+    match arg.split_once('=') {
+        Some((n, v)) if !n.trim().is_empty() && !v.trim().is_empty() => {
+            Ok((n.trim().to_string(), v.trim().to_string()))
+        }
+        _ => Err(Diagnostic::plain(format!("--set {arg}: expected NAME=VALUE"))),
+    }
+}

@@ -1,0 +1,337 @@
+//! Typed access to a block's parameters, for block constructors.
+//!
+//! Every accessor turns a wrong value into a positioned diagnostic naming
+//! the block and the key; [`Params::finish`] reports keys no accessor asked
+//! for, with the closest documented name as a hint.
+
+use crate::block::SampleTime;
+use crate::diag::{Diagnostic, Pos};
+use crate::expr::{Constants, Expr, ExprError, Scope};
+use crate::registry::ParamDoc;
+use crate::yaml::{Key, Kind, Yaml};
+use std::path::{Path, PathBuf};
+
+/// A block's parameters as written, with the scope their expressions see.
+pub struct Params<'a> {
+    block: &'a str,
+    type_name: &'a str,
+    block_pos: &'a Pos,
+    entries: &'a [(Key, Yaml)],
+    scope: &'a [(String, f64)],
+    dir: &'a Path,
+    docs: &'static [ParamDoc],
+    used: Vec<bool>,
+}
+
+impl<'a> Params<'a> {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        block: &'a str,
+        type_name: &'a str,
+        block_pos: &'a Pos,
+        entries: &'a [(Key, Yaml)],
+        scope: &'a [(String, f64)],
+        dir: &'a Path,
+        docs: &'static [ParamDoc],
+    ) -> Self {
+        let used = entries.iter().map(|(k, _)| k.name == "type").collect();
+        Params { block, type_name, block_pos, entries, scope, dir, docs, used }
+    }
+
+    /// The block's full name (`outer/inner` inside subsystems).
+    pub fn block_name(&self) -> &str {
+        self.block
+    }
+
+    /// The graph parameters visible to this block, for blocks that compile
+    /// expressions of their own (`fcn`).
+    pub fn scope(&self) -> &'a [(String, f64)] {
+        self.scope
+    }
+
+    /// The raw value of `key`, marking it used.
+    pub fn raw(&mut self, key: &str) -> Option<&'a Yaml> {
+        let i = self.entries.iter().position(|(k, _)| k.name == key)?;
+        self.used[i] = true;
+        Some(&self.entries[i].1)
+    }
+
+    /// Whether `key` is present (without marking it used).
+    pub fn has(&self, key: &str) -> bool {
+        self.entries.iter().any(|(k, _)| k.name == key)
+    }
+
+    /// An error about `key` of this block, at the key's value if present.
+    pub fn error(&self, key: &str, message: impl std::fmt::Display) -> Diagnostic {
+        let pos = self
+            .entries
+            .iter()
+            .find(|(k, _)| k.name == key)
+            .map_or(self.block_pos, |(_, v)| &v.pos);
+        Diagnostic::at(pos, format!("block `{}` ({}): `{key}`: {message}", self.block, self.type_name))
+    }
+
+    /// An error about the block as a whole, at its name.
+    pub fn block_error(&self, message: impl std::fmt::Display) -> Diagnostic {
+        Diagnostic::at(self.block_pos, format!("block `{}` ({}): {message}", self.block, self.type_name))
+    }
+
+    fn missing(&self, key: &str) -> Diagnostic {
+        self.block_error(format!("missing parameter `{key}`"))
+            .with_hint(format!("see `ctlgraph blocks {}`", self.type_name))
+    }
+
+    /// Evaluates a number or an expression over the graph parameters.
+    pub fn number_value(&self, key: &str, v: &Yaml) -> Result<f64, Diagnostic> {
+        match &v.kind {
+            Kind::Num(x) => Ok(*x),
+            Kind::Str(s) => eval_number(s, &v.pos, self.scope).map_err(|d| {
+                let message = format!("block `{}` ({}): `{key}`: {}", self.block, self.type_name, d.message);
+                Diagnostic { message, ..d }
+            }),
+            _ => Err(self.error(key, format!("expected a number, found {}", v.describe()))),
+        }
+    }
+
+    /// A required number.
+    pub fn number(&mut self, key: &str) -> Result<f64, Diagnostic> {
+        match self.raw(key) {
+            Some(v) => self.number_value(key, v),
+            None => Err(self.missing(key)),
+        }
+    }
+
+    /// An optional number.
+    pub fn opt_number(&mut self, key: &str) -> Result<Option<f64>, Diagnostic> {
+        match self.raw(key) {
+            Some(v) if v.kind != Kind::Null => self.number_value(key, v).map(Some),
+            _ => Ok(None),
+        }
+    }
+
+    pub fn number_or(&mut self, key: &str, default: f64) -> Result<f64, Diagnostic> {
+        Ok(self.opt_number(key)?.unwrap_or(default))
+    }
+
+    /// A number that must satisfy `ok`, else an error saying `requirement`.
+    pub fn number_where(
+        &mut self,
+        key: &str,
+        default: Option<f64>,
+        ok: impl Fn(f64) -> bool,
+        requirement: &str,
+    ) -> Result<f64, Diagnostic> {
+        let v = match default {
+            Some(d) => self.number_or(key, d)?,
+            None => self.number(key)?,
+        };
+        if ok(v) { Ok(v) } else { Err(self.error(key, format!("must be {requirement}, got {v}"))) }
+    }
+
+    /// A positive whole number.
+    pub fn count_or(&mut self, key: &str, default: usize) -> Result<usize, Diagnostic> {
+        let v = self.number_or(key, default as f64)?;
+        if v >= 1.0 && v.fract() == 0.0 && v < 1e6 {
+            Ok(v as usize)
+        } else {
+            Err(self.error(key, format!("must be a positive whole number, got {v}")))
+        }
+    }
+
+    /// A list of numbers (a single number is a list of one).
+    pub fn vector(&mut self, key: &str) -> Result<Vec<f64>, Diagnostic> {
+        match self.raw(key) {
+            Some(v) => self.vector_value(key, v),
+            None => Err(self.missing(key)),
+        }
+    }
+
+    pub fn opt_vector(&mut self, key: &str) -> Result<Option<Vec<f64>>, Diagnostic> {
+        match self.raw(key) {
+            Some(v) if v.kind != Kind::Null => self.vector_value(key, v).map(Some),
+            _ => Ok(None),
+        }
+    }
+
+    fn vector_value(&self, key: &str, v: &Yaml) -> Result<Vec<f64>, Diagnostic> {
+        match &v.kind {
+            Kind::Seq(items) => items.iter().map(|i| self.number_value(key, i)).collect(),
+            Kind::Num(_) | Kind::Str(_) => Ok(vec![self.number_value(key, v)?]),
+            _ => Err(self.error(key, format!("expected a list of numbers, found {}", v.describe()))),
+        }
+    }
+
+    /// A matrix as a list of rows; a list of numbers is one row, a number a 1×1.
+    pub fn matrix(&mut self, key: &str) -> Result<Vec<Vec<f64>>, Diagnostic> {
+        let Some(v) = self.raw(key) else { return Err(self.missing(key)) };
+        match &v.kind {
+            Kind::Seq(rows) if rows.iter().all(|r| matches!(r.kind, Kind::Seq(_))) && !rows.is_empty() => {
+                rows.iter().map(|r| self.vector_value(key, r)).collect()
+            }
+            Kind::Seq(rows) if rows.is_empty() => Ok(Vec::new()),
+            _ => Ok(vec![self.vector_value(key, v)?]),
+        }
+    }
+
+    /// A list whose items are numbers or `[re, im]` pairs (a complex
+    /// number, standing for itself and its conjugate).
+    pub fn roots(&mut self, key: &str) -> Result<Vec<(f64, f64)>, Diagnostic> {
+        let Some(v) = self.raw(key) else { return Ok(Vec::new()) };
+        let items = match &v.kind {
+            Kind::Seq(items) => items.as_slice(),
+            Kind::Null => return Ok(Vec::new()),
+            _ => std::slice::from_ref(v),
+        };
+        let mut out = Vec::new();
+        for item in items {
+            match &item.kind {
+                Kind::Seq(pair) if pair.len() == 2 => {
+                    let (re, im) = (self.number_value(key, &pair[0])?, self.number_value(key, &pair[1])?);
+                    out.push((re, im));
+                    if im != 0.0 {
+                        out.push((re, -im));
+                    }
+                }
+                Kind::Seq(_) => {
+                    return Err(Diagnostic::at(&item.pos, "a complex root is written [re, im]".to_string()));
+                }
+                _ => out.push((self.number_value(key, item)?, 0.0)),
+            }
+        }
+        Ok(out)
+    }
+
+    pub fn opt_string(&mut self, key: &str) -> Result<Option<&'a str>, Diagnostic> {
+        match self.raw(key) {
+            None => Ok(None),
+            Some(v) => match &v.kind {
+                Kind::Str(s) => Ok(Some(s)),
+                _ => Err(self.error(key, format!("expected a string, found {}", v.describe()))),
+            },
+        }
+    }
+
+    pub fn string(&mut self, key: &str) -> Result<&'a str, Diagnostic> {
+        self.opt_string(key)?.ok_or_else(|| self.missing(key))
+    }
+
+    /// One of `options` (the first is the default).
+    pub fn choice(&mut self, key: &str, options: &[&'static str]) -> Result<&'static str, Diagnostic> {
+        let Some(s) = self.opt_string(key)? else { return Ok(options[0]) };
+        options.iter().copied().find(|o| *o == s).ok_or_else(|| {
+            self.error(key, format!("`{s}` is not one of: {}", options.join(", "))).suggest(s, options.iter().copied())
+        })
+    }
+
+    pub fn bool_or(&mut self, key: &str, default: bool) -> Result<bool, Diagnostic> {
+        match self.raw(key) {
+            None => Ok(default),
+            Some(v) => match v.kind {
+                Kind::Bool(b) => Ok(b),
+                _ => Err(self.error(key, format!("expected true or false, found {}", v.describe()))),
+            },
+        }
+    }
+
+    /// A list of strings (a single string is a list of one).
+    pub fn strings(&mut self, key: &str) -> Result<Vec<&'a str>, Diagnostic> {
+        let Some(v) = self.raw(key) else { return Ok(Vec::new()) };
+        let items = match &v.kind {
+            Kind::Seq(items) => items.as_slice(),
+            _ => std::slice::from_ref(v),
+        };
+        items.iter().map(|i| i.expect_str(&format!("`{key}` item"))).collect()
+    }
+
+    /// A file path, relative to the graph file's folder.
+    pub fn path(&mut self, key: &str) -> Result<PathBuf, Diagnostic> {
+        Ok(self.dir.join(self.string(key)?))
+    }
+
+    /// The `sample_time` parameter: 0 continuous, -1 inherited, `inf`
+    /// constant, T > 0 discrete, or `[T, offset]` with 0 ≤ offset < T.
+    pub fn sample_time(&mut self, default: SampleTime) -> Result<SampleTime, Diagnostic> {
+        let key = "sample_time";
+        let Some(v) = self.raw(key) else { return Ok(default) };
+        let (period, offset) = match &v.kind {
+            Kind::Seq(items) if items.len() == 2 => {
+                (self.number_value(key, &items[0])?, self.number_value(key, &items[1])?)
+            }
+            Kind::Str(s) if s == "inf" => return Ok(SampleTime::Constant),
+            Kind::Seq(_) => return Err(self.error(key, "expected a period or [period, offset]")),
+            _ => (self.number_value(key, v)?, 0.0),
+        };
+        let hint = "0 = continuous, -1 = inherited, T > 0 = every T seconds, [T, offset] with 0 <= offset < T";
+        match period {
+            p if p == 0.0 && offset == 0.0 => Ok(SampleTime::Continuous),
+            p if p == -1.0 && offset == 0.0 => Ok(SampleTime::Inherited),
+            p if p == f64::INFINITY => Ok(SampleTime::Constant),
+            p if p > 0.0 && p.is_finite() && (0.0..p).contains(&offset) => {
+                Ok(SampleTime::Discrete { period: p, offset })
+            }
+            _ => Err(self.error(key, format!("bad sample time [{period}, {offset}]")).with_hint(hint)),
+        }
+    }
+
+    /// Like [`Params::sample_time`] for blocks that only exist in discrete
+    /// form: the period is required.
+    pub fn discrete_sample_time(&mut self) -> Result<SampleTime, Diagnostic> {
+        if !self.has("sample_time") {
+            return Err(self.missing("sample_time"));
+        }
+        match self.sample_time(SampleTime::Inherited)? {
+            st @ SampleTime::Discrete { .. } => Ok(st),
+            other => Err(self
+                .error("sample_time", format!("this block is discrete: needs a period T > 0, got {other}"))
+                .with_hint("write `sample_time: T` or `sample_time: [T, offset]`")),
+        }
+    }
+
+    /// Reports keys no accessor used (typos, parameters of another type).
+    pub fn finish(self) -> Result<(), Diagnostic> {
+        let known: Vec<&str> = self.docs.iter().map(|d| d.name).collect();
+        for ((key, _), used) in self.entries.iter().zip(&self.used) {
+            if !used {
+                let message = format!("block `{}` ({}): unknown parameter `{}`", self.block, self.type_name, key.name);
+                return Err(Diagnostic::at(&key.pos, message)
+                    .suggest(&key.name, known.iter().copied())
+                    .or_hint(format!("{} takes: {}", self.type_name, known.join(", "))));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Evaluates an expression string to a number; errors point inside it.
+pub fn eval_number(src: &str, pos: &Pos, scope: &[(String, f64)]) -> Result<f64, Diagnostic> {
+    let expr = Expr::parse(src, &Constants(scope)).map_err(|e| expr_diagnostic(&e, pos))?;
+    expr.constant()
+        .ok_or_else(|| Diagnostic::at(pos, format!("`{src}` is not a constant")))
+}
+
+/// A positioned diagnostic for an error inside an expression written at `pos`.
+pub fn expr_diagnostic(e: &ExprError, pos: &Pos) -> Diagnostic {
+    let d = Diagnostic::at(&pos.shifted(e.offset), e.message.clone());
+    match &e.hint {
+        Some(h) => d.with_hint(h.clone()),
+        None => d,
+    }
+}
+
+/// A scope for expressions that also see variables (the `fcn` block).
+pub struct VarScope<'a> {
+    pub vars: &'a [&'a str],
+    pub params: &'a [(String, f64)],
+}
+
+impl Scope for VarScope<'_> {
+    fn lookup(&self, name: &str) -> Option<crate::expr::Binding> {
+        match self.vars.iter().position(|v| *v == name) {
+            Some(i) => Some(crate::expr::Binding::Slot(i)),
+            None => Constants(self.params).lookup(name),
+        }
+    }
+    fn names(&self) -> Vec<String> {
+        self.vars.iter().map(|v| v.to_string()).chain(Constants(self.params).names()).collect()
+    }
+}

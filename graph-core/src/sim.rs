@@ -1,0 +1,336 @@
+//! The hybrid simulator: Simulink's major-step semantics over a compiled
+//! [`Model`], with continuous states integrated by a `ctlgraph-solver`
+//! method between major steps.
+//!
+//! Major step times are the union of the fixed-step grid (fixed-step
+//! methods), every clock's sample hits, block events (a step's switching
+//! time) and the stop time; the adaptive method adds its own accepted steps.
+//! Hits are computed from integer tick counts (`offset + k·period`), never
+//! by accumulating floating-point time. After `initialize`, stepping
+//! allocates nothing.
+
+use crate::block::{Io, Port};
+use crate::compile::{BlockMeta, Model, Rate};
+use ctlgraph_solver::{Integrator, Method, OdeSystem, SolverError, Stats};
+use std::fmt;
+
+/// Why a run stopped early.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SimError {
+    /// A signal or state became NaN or infinite.
+    NonFinite { t: f64, block: String, what: String, value: f64 },
+    Solver { t: f64, error: SolverError },
+}
+
+impl fmt::Display for SimError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SimError::NonFinite { t, block, what, value } => {
+                write!(f, "t = {t}: block `{block}`: {what} is {value}")
+            }
+            SimError::Solver { t, error } => write!(f, "t = {t}: solver: {error}"),
+        }
+    }
+}
+
+impl std::error::Error for SimError {}
+
+/// One discrete rate's position on its own time line.
+#[derive(Clone, Copy, Debug)]
+struct Clock {
+    period: f64,
+    offset: f64,
+    /// Index of the next hit not yet taken.
+    tick: u64,
+    hit: bool,
+}
+
+impl Clock {
+    fn next_time(&self) -> f64 {
+        self.offset + self.tick as f64 * self.period
+    }
+}
+
+/// Counters for the run report.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RunStats {
+    pub major_steps: u64,
+    pub solver: Stats,
+}
+
+/// A model being simulated.
+pub struct Simulator {
+    model: Model,
+    signals: Vec<f64>,
+    x: Vec<f64>,
+    integ: Integrator,
+    clocks: Vec<Clock>,
+    /// Fixed-step grid: next tick and step (0 for the adaptive method).
+    grid_tick: u64,
+    grid_step: f64,
+    t: f64,
+    stop: f64,
+    /// Times closer than this are the same major step.
+    tol: f64,
+    first: bool,
+    major_steps: u64,
+    /// Blocks evaluated in minor steps (continuous rate), execution order.
+    continuous: Vec<usize>,
+    /// Blocks with continuous states.
+    stateful: Vec<usize>,
+}
+
+impl Simulator {
+    /// Prepares a run of `model` to `stop` (the graph's own stop time when
+    /// `None`) and computes the initial states.
+    pub fn new(model: Model, stop: Option<f64>) -> Self {
+        let stop = stop.unwrap_or(model.sim.stop);
+        let method = model.sim.method;
+        let grid_step = if method.is_adaptive() { 0.0 } else { method.max_step() };
+        let clocks: Vec<Clock> =
+            model.clocks.iter().map(|&(period, offset)| Clock { period, offset, tick: 0, hit: false }).collect();
+        let smallest = clocks.iter().map(|c| c.period).chain([stop, method.max_step()]).filter(|&p| p > 0.0).fold(f64::INFINITY, f64::min);
+        let continuous = (0..model.meta.len()).filter(|&i| model.meta[i].rate == Rate::Continuous).collect();
+        let stateful = (0..model.meta.len()).filter(|&i| !model.meta[i].states.is_empty()).collect();
+        let mut sim = Simulator {
+            signals: vec![0.0; model.signal_len],
+            x: vec![0.0; model.n_states],
+            integ: Integrator::new(method, model.n_states),
+            clocks,
+            grid_tick: 0,
+            grid_step,
+            t: 0.0,
+            stop,
+            tol: 1e-9 * smallest,
+            first: true,
+            major_steps: 0,
+            continuous,
+            stateful,
+            model,
+        };
+        sim.reset();
+        sim
+    }
+
+    /// Back to t = 0 with initial states (blocks re-initialised).
+    pub fn reset(&mut self) {
+        self.t = 0.0;
+        self.first = true;
+        self.major_steps = 0;
+        self.grid_tick = 1;
+        self.signals.iter_mut().for_each(|s| *s = 0.0);
+        for (b, m) in self.model.blocks.iter_mut().zip(&self.model.meta) {
+            b.initialize(&mut self.x[m.states.clone()]);
+        }
+        for c in &mut self.clocks {
+            c.tick = 0;
+        }
+        self.mark_hits();
+        self.integ = Integrator::new(self.model.sim.method, self.model.n_states);
+    }
+
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
+    pub fn stop_time(&self) -> f64 {
+        self.stop
+    }
+
+    pub fn method(&self) -> Method {
+        self.integ.method()
+    }
+
+    /// The signal buffer (index with [`crate::compile::Column`] offsets).
+    pub fn signals(&self) -> &[f64] {
+        &self.signals
+    }
+
+    pub fn states(&self) -> &[f64] {
+        &self.x
+    }
+
+    pub fn stats(&self) -> RunStats {
+        RunStats { major_steps: self.major_steps, solver: self.integ.stats() }
+    }
+
+    /// Whether the run has reached its stop time.
+    pub fn finished(&self) -> bool {
+        self.t >= self.stop - self.tol && !self.first
+    }
+
+    /// Takes clocks whose next hit is (within tolerance) now.
+    fn mark_hits(&mut self) -> bool {
+        let mut any = false;
+        for c in &mut self.clocks {
+            c.hit = c.next_time() <= self.t + self.tol;
+            if c.hit {
+                c.tick += 1;
+                any = true;
+            }
+        }
+        any
+    }
+
+    /// Step (1) of a major step: outputs in execution order, then a check
+    /// that every signal is finite.
+    pub fn outputs(&mut self) -> Result<(), SimError> {
+        let m = &mut self.model;
+        for (i, block) in m.blocks.iter_mut().enumerate() {
+            let meta = &m.meta[i];
+            let runs = match meta.rate {
+                Rate::Continuous => true,
+                Rate::Constant => self.first,
+                Rate::Discrete(c) => self.clocks[c].hit,
+            };
+            if runs {
+                let mut io = io_for(meta, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
+                block.output(&mut io);
+            }
+        }
+        self.first = false;
+        if let Some(k) = self.signals.iter().position(|v| !v.is_finite()) {
+            let (meta, port) = self.model.signal_owner(k).map_or(("?".to_string(), "?"), |(m, p)| (m.name.clone(), p));
+            return Err(SimError::NonFinite { t: self.t, block: meta, what: format!("output `{port}`"), value: self.signals[k] });
+        }
+        Ok(())
+    }
+
+    /// Steps (3) and (4): discrete updates at hits (and major-step updates
+    /// of continuous blocks), then integration to the next major step.
+    pub fn advance(&mut self) -> Result<(), SimError> {
+        let m = &mut self.model;
+        for (i, block) in m.blocks.iter_mut().enumerate() {
+            let meta = &m.meta[i];
+            let runs = match meta.rate {
+                Rate::Continuous => true,
+                Rate::Constant => false,
+                Rate::Discrete(c) => self.clocks[c].hit,
+            };
+            if runs {
+                let mut io = io_for(meta, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
+                block.update(&mut io);
+            }
+        }
+        let target = self.next_major_time();
+        let t_new = if self.x.is_empty() {
+            // Nothing to integrate; max_step still bounds the adaptive
+            // method's major steps so continuous sources are sampled finely.
+            target.min(self.t + self.integ.method().max_step())
+        } else {
+            let mut sys = Minor {
+                model: &mut self.model,
+                signals: &mut self.signals,
+                continuous: &self.continuous,
+                stateful: &self.stateful,
+                t_end: target,
+            };
+            let t = self.t;
+            self.integ.advance(&mut sys, t, target, &mut self.x).map_err(|error| SimError::Solver { t, error })?
+        };
+        // Land exactly on the target when the solver reached it.
+        self.t = if (target - t_new).abs() <= self.tol { target } else { t_new };
+        if self.grid_step > 0.0 {
+            while (self.grid_tick as f64) * self.grid_step <= self.t + self.tol {
+                self.grid_tick += 1;
+            }
+        }
+        let mut clamped = false;
+        for &i in &self.stateful {
+            let meta = &self.model.meta[i];
+            clamped |= self.model.blocks[i].clamp_states(&mut self.x[meta.states.clone()]);
+        }
+        let hit = self.mark_hits();
+        let event = self.model.blocks.iter().any(|b| (b.next_event(self.t - 2.0 * self.tol) - self.t).abs() <= self.tol);
+        if hit || event || clamped {
+            self.integ.invalidate();
+        }
+        if let Some(k) = self.x.iter().position(|v| !v.is_finite()) {
+            let owner = self.model.meta.iter().find(|m| m.states.contains(&k)).map_or("?", |m| m.name.as_str());
+            return Err(SimError::NonFinite { t: self.t, block: owner.to_string(), what: format!("state {}", k), value: self.x[k] });
+        }
+        self.major_steps += 1;
+        Ok(())
+    }
+
+    /// The earliest of: next clock hit, next grid point, next block event,
+    /// the stop time. An event within tolerance of another candidate wins,
+    /// so sources switch exactly at their event time.
+    fn next_major_time(&self) -> f64 {
+        let mut next = self.stop;
+        for c in &self.clocks {
+            next = next.min(c.next_time());
+        }
+        if self.grid_step > 0.0 {
+            next = next.min(self.grid_tick as f64 * self.grid_step);
+        }
+        let mut event = f64::INFINITY;
+        for b in &self.model.blocks {
+            event = event.min(b.next_event(self.t));
+        }
+        if event <= next + self.tol { event } else { next }
+    }
+
+    /// Runs to the stop time, handing the signals to `sink` at every major
+    /// step (including t = 0 and the stop time).
+    pub fn run(&mut self, sink: &mut dyn FnMut(f64, &[f64])) -> Result<RunStats, SimError> {
+        loop {
+            self.outputs()?;
+            sink(self.t, &self.signals);
+            if self.finished() {
+                return Ok(self.stats());
+            }
+            self.advance()?;
+        }
+    }
+}
+
+fn io_for<'a>(
+    meta: &BlockMeta,
+    t: f64,
+    left_limit: bool,
+    x: &'a [f64],
+    signals: &'a mut [f64],
+    in_ports: &'a [Port],
+    out_ports: &'a [Port],
+) -> Io<'a> {
+    Io::new(
+        t,
+        left_limit,
+        &x[meta.states.clone()],
+        signals,
+        &in_ports[meta.inputs.clone()],
+        &out_ports[meta.outputs.clone()],
+    )
+}
+
+/// The ODE the solver sees: set states, recompute continuous outputs, ask
+/// stateful blocks for derivatives. Discrete outputs hold.
+struct Minor<'a> {
+    model: &'a mut Model,
+    signals: &'a mut [f64],
+    continuous: &'a [usize],
+    stateful: &'a [usize],
+    t_end: f64,
+}
+
+impl OdeSystem for Minor<'_> {
+    fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        let m = &mut *self.model;
+        let left = t >= self.t_end;
+        for &i in self.continuous {
+            let meta = &m.meta[i];
+            let mut io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports);
+            m.blocks[i].output(&mut io);
+        }
+        for &i in self.stateful {
+            let meta = &m.meta[i];
+            let io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports);
+            m.blocks[i].derivatives(&io, &mut dx[meta.states.clone()]);
+        }
+    }
+}
