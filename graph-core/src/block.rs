@@ -30,8 +30,12 @@ impl fmt::Display for SampleTime {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SampleTime::Continuous => f.write_str("continuous"),
-            SampleTime::Discrete { period, offset } if *offset == 0.0 => write!(f, "discrete {period}"),
-            SampleTime::Discrete { period, offset } => write!(f, "discrete {period} offset {offset}"),
+            SampleTime::Discrete { period, offset } if *offset == 0.0 => {
+                write!(f, "discrete {period}")
+            }
+            SampleTime::Discrete { period, offset } => {
+                write!(f, "discrete {period} offset {offset}")
+            }
             SampleTime::Inherited => f.write_str("inherited"),
             SampleTime::Constant => f.write_str("constant"),
         }
@@ -73,24 +77,36 @@ pub struct Interface {
 
 impl Interface {
     pub fn new(sample_time: SampleTime) -> Self {
-        Interface { inputs: Vec::new(), outputs: Vec::new(), sample_time }
+        Interface {
+            inputs: Vec::new(),
+            outputs: Vec::new(),
+            sample_time,
+        }
     }
 
     /// Adds an input port.
     pub fn input(mut self, name: &str, width: Width, feedthrough: bool) -> Self {
-        self.inputs.push(InputPort { name: name.to_string(), width, feedthrough });
+        self.inputs.push(InputPort {
+            name: name.to_string(),
+            width,
+            feedthrough,
+        });
         self
     }
 
     /// Adds an output port.
     pub fn output(mut self, name: &str, width: Width) -> Self {
-        self.outputs.push(OutputPort { name: name.to_string(), width });
+        self.outputs.push(OutputPort {
+            name: name.to_string(),
+            width,
+        });
         self
     }
 
     /// Whether any port takes the common width.
     pub fn has_common_width(&self) -> bool {
-        self.inputs.iter().any(|p| p.width == Width::Common) || self.outputs.iter().any(|p| p.width == Width::Common)
+        self.inputs.iter().any(|p| p.width == Width::Common)
+            || self.outputs.iter().any(|p| p.width == Width::Common)
     }
 }
 
@@ -124,7 +140,14 @@ impl<'a> Io<'a> {
         inputs: &'a [Port],
         outputs: &'a [Port],
     ) -> Self {
-        Io { t, x, left_limit, signals, inputs, outputs }
+        Io {
+            t,
+            x,
+            left_limit,
+            signals,
+            inputs,
+            outputs,
+        }
     }
 
     /// All elements of input `port`.
@@ -145,6 +168,10 @@ impl<'a> Io<'a> {
     pub fn u_at(&self, port: usize, k: usize) -> f64 {
         let p = self.inputs[port];
         self.signals[p.offset + if p.width == 1 { 0 } else { k }]
+    }
+
+    pub fn num_inputs(&self) -> usize {
+        self.inputs.len()
     }
 
     pub fn input_width(&self, port: usize) -> usize {

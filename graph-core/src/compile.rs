@@ -95,7 +95,11 @@ struct Driver {
 /// Compiles a flat graph with the block types of `reg`.
 pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let mut nodes = instantiate(g, reg)?;
-    let index: HashMap<&str, usize> = nodes.iter().enumerate().map(|(i, n)| (n.flat.path.as_str(), i)).collect();
+    let index: HashMap<&str, usize> = nodes
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (n.flat.path.as_str(), i))
+        .collect();
     let direct = connect(g, &nodes, &index)?;
     let drivers = resolve_drivers(&nodes, &direct)?;
     resolve_widths(&mut nodes, &drivers)?;
@@ -108,7 +112,13 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     for &i in &order {
         for (p, port) in nodes[i].iface.outputs.iter().enumerate() {
             let width = resolved(port.width, nodes[i].width);
-            out_offset.insert((i, p), Port { offset: signal_len, width });
+            out_offset.insert(
+                (i, p),
+                Port {
+                    offset: signal_len,
+                    width,
+                },
+            );
             signal_len += width;
         }
     }
@@ -119,7 +129,10 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let position: HashMap<usize, usize> = order.iter().enumerate().map(|(k, &i)| (i, k)).collect();
     for &i in &order {
         let node = &mut nodes[i];
-        let block = node.block.take().ok_or_else(|| Diagnostic::plain("internal: block built twice"))?;
+        let block = node
+            .block
+            .take()
+            .ok_or_else(|| Diagnostic::plain("internal: block built twice"))?;
         let in_start = in_ports.len();
         for d in &drivers[i] {
             in_ports.push(out_offset[&(d.src, d.port)]);
@@ -138,7 +151,10 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
             sample_time: match rate {
                 Rate::Constant => SampleTime::Constant,
                 Rate::Continuous => SampleTime::Continuous,
-                Rate::Discrete(c) => SampleTime::Discrete { period: clocks[c].0, offset: clocks[c].1 },
+                Rate::Discrete(c) => SampleTime::Discrete {
+                    period: clocks[c].0,
+                    offset: clocks[c].1,
+                },
             },
             inputs: in_start..in_ports.len(),
             outputs: out_start..out_ports.len(),
@@ -191,24 +207,52 @@ fn instantiate<'g>(g: &'g FlatGraph, reg: &Registry) -> Result<Vec<Node<'g>>, Di
     for fb in &g.blocks {
         let spec = &fb.spec;
         let Some(ty) = reg.get(&spec.type_name) else {
-            return Err(Diagnostic::at(&spec.type_pos, format!("block `{}`: unknown block type `{}`", fb.path, spec.type_name))
-                .suggest(&spec.type_name, reg.names())
-                .or_hint("`ctlgraph blocks` lists the block types"));
+            return Err(Diagnostic::at(
+                &spec.type_pos,
+                format!(
+                    "block `{}`: unknown block type `{}`",
+                    fb.path, spec.type_name
+                ),
+            )
+            .suggest(&spec.type_name, reg.names())
+            .or_hint("`ctlgraph blocks` lists the block types"));
         };
-        let mut params = Params::new(&fb.path, ty.name, &spec.pos, &spec.params, &fb.scope, &fb.dir, ty.params);
+        let mut params = Params::new(
+            &fb.path,
+            ty.name,
+            &spec.pos,
+            &spec.params,
+            &fb.scope,
+            &fb.dir,
+            ty.params,
+        );
         if ty.name == INPORT || ty.name == OUTPORT {
             params.finish()?;
             if ty.name == INPORT && !fb.path.contains('/') {
                 return Err(Diagnostic::at(&spec.type_pos, format!("block `{}`: an inport only makes sense inside a subsystem", fb.path))
                     .with_hint("a top-level graph gets its inputs from source blocks (constant, step, from_csv, …)"));
             }
-            let iface = Interface::new(SampleTime::Inherited).input("in", Width::Common, true).output("out", Width::Common);
-            nodes.push(Node { flat: fb, iface, block: None, is_virtual: true, width: None });
+            let iface = Interface::new(SampleTime::Inherited)
+                .input("in", Width::Common, true)
+                .output("out", Width::Common);
+            nodes.push(Node {
+                flat: fb,
+                iface,
+                block: None,
+                is_virtual: true,
+                width: None,
+            });
             continue;
         }
         let built = (ty.build)(&mut params)?;
         params.finish()?;
-        nodes.push(Node { flat: fb, iface: built.iface, block: Some(built.block), is_virtual: false, width: None });
+        nodes.push(Node {
+            flat: fb,
+            iface: built.iface,
+            block: Some(built.block),
+            is_virtual: false,
+            width: None,
+        });
     }
     Ok(nodes)
 }
@@ -224,13 +268,26 @@ fn port_index(node: &Node, ep: &Endpoint, input: bool) -> Result<usize, Diagnost
     match &ep.port {
         _ if node.is_virtual => Ok(0),
         Some(p) => names.iter().position(|n| n == p).ok_or_else(|| {
-            let listing = if names.is_empty() { format!("it has no {side}s") } else { format!("{side}s: {}", names.join(", ")) };
-            Diagnostic::at(&ep.pos, format!("{what} has no {side} `{p}`")).suggest(p, names.iter().copied()).or_hint(&listing)
+            let listing = if names.is_empty() {
+                format!("it has no {side}s")
+            } else {
+                format!("{side}s: {}", names.join(", "))
+            };
+            Diagnostic::at(&ep.pos, format!("{what} has no {side} `{p}`"))
+                .suggest(p, names.iter().copied())
+                .or_hint(&listing)
         }),
         None if names.len() == 1 => Ok(0),
         None if names.is_empty() => Err(Diagnostic::at(&ep.pos, format!("{what} has no {side}s"))),
-        None => Err(Diagnostic::at(&ep.pos, format!("{what} has {} {side}s: name one as `{}.PORT`", names.len(), ep.block))
-            .with_hint(format!("{side}s: {}", names.join(", ")))),
+        None => Err(Diagnostic::at(
+            &ep.pos,
+            format!(
+                "{what} has {} {side}s: name one as `{}.PORT`",
+                names.len(),
+                ep.block
+            ),
+        )
+        .with_hint(format!("{side}s: {}", names.join(", ")))),
     }
 }
 
@@ -240,10 +297,14 @@ fn connect(
     nodes: &[Node],
     index: &HashMap<&str, usize>,
 ) -> Result<Vec<Vec<Option<Driver>>>, Diagnostic> {
-    let mut direct: Vec<Vec<Option<Driver>>> = nodes.iter().map(|n| vec![None; n.iface.inputs.len()]).collect();
+    let mut direct: Vec<Vec<Option<Driver>>> = nodes
+        .iter()
+        .map(|n| vec![None; n.iface.inputs.len()])
+        .collect();
     let find = |ep: &Endpoint| -> Result<usize, Diagnostic> {
         index.get(ep.block.as_str()).copied().ok_or_else(|| {
-            Diagnostic::at(&ep.pos, format!("no block named `{}`", ep.block)).suggest(&ep.block, index.keys().copied())
+            Diagnostic::at(&ep.pos, format!("no block named `{}`", ep.block))
+                .suggest(&ep.block, index.keys().copied())
         })
     };
     for w in &g.wires {
@@ -252,23 +313,39 @@ fn connect(
         let dp = port_index(&nodes[d], &w.dst, true)?;
         if let Some(prev) = &direct[d][dp] {
             let port = &nodes[d].iface.inputs[dp].name;
-            return Err(Diagnostic::at(&w.dst.pos, format!("input `{}.{port}` is wired twice", nodes[d].flat.path))
-                .with_hint(format!("it is already fed at line {}; use a `sum` block to add signals", prev.pos.line)));
+            return Err(Diagnostic::at(
+                &w.dst.pos,
+                format!("input `{}.{port}` is wired twice", nodes[d].flat.path),
+            )
+            .with_hint(format!(
+                "it is already fed at line {}; use a `sum` block to add signals",
+                prev.pos.line
+            )));
         }
-        direct[d][dp] = Some(Driver { src: s, port: sp, pos: w.dst.pos.clone() });
+        direct[d][dp] = Some(Driver {
+            src: s,
+            port: sp,
+            pos: w.dst.pos.clone(),
+        });
     }
     Ok(direct)
 }
 
 /// Follows wires through inport/outport blocks to the real source of each
 /// real block's inputs. Virtual blocks get no drivers of their own.
-fn resolve_drivers(nodes: &[Node], direct: &[Vec<Option<Driver>>]) -> Result<Vec<Vec<Driver>>, Diagnostic> {
+fn resolve_drivers(
+    nodes: &[Node],
+    direct: &[Vec<Option<Driver>>],
+) -> Result<Vec<Vec<Driver>>, Diagnostic> {
     let unwired = |n: usize, p: usize| {
         let node = &nodes[n];
         let message = if node.is_virtual {
             format!("subsystem port `{}` is not wired", node.flat.path)
         } else {
-            format!("input `{}` of block `{}` is not wired", node.iface.inputs[p].name, node.flat.path)
+            format!(
+                "input `{}` of block `{}` is not wired",
+                node.iface.inputs[p].name, node.flat.path
+            )
         };
         Diagnostic::at(&node.flat.spec.pos, message).with_hint("every input needs exactly one wire")
     };
@@ -289,7 +366,10 @@ fn resolve_drivers(nodes: &[Node], direct: &[Vec<Option<Driver>>]) -> Result<Vec
                 d.pos = pos;
                 hops += 1;
                 if hops > nodes.len() {
-                    return Err(Diagnostic::at(&node.flat.spec.pos, "subsystem ports are wired in a circle"));
+                    return Err(Diagnostic::at(
+                        &node.flat.spec.pos,
+                        "subsystem ports are wired in a circle",
+                    ));
                 }
             }
             ports.push(d);
@@ -315,7 +395,9 @@ fn resolve_widths(nodes: &mut [Node], drivers: &[Vec<Driver>]) -> Result<(), Dia
                         nodes[i].width = Some(sw);
                         changed = true;
                     }
-                    (Width::Fixed(n), None) if nodes[d.src].iface.outputs[d.port].width == Width::Common => {
+                    (Width::Fixed(n), None)
+                        if nodes[d.src].iface.outputs[d.port].width == Width::Common =>
+                    {
                         nodes[d.src].width = Some(n);
                         changed = true;
                     }
@@ -339,18 +421,30 @@ fn resolve_widths(nodes: &mut [Node], drivers: &[Vec<Driver>]) -> Result<(), Dia
                     &d.pos,
                     format!(
                         "width mismatch: `{}.{}` carries {sw} value(s) but `{}.{}` takes {want}",
-                        src.flat.path, src.iface.outputs[d.port].name, nodes[i].flat.path, port.name
+                        src.flat.path,
+                        src.iface.outputs[d.port].name,
+                        nodes[i].flat.path,
+                        port.name
                     ),
                 )
                 .with_hint("use mux/demux/selector to change widths"));
             }
         }
     }
-    for node in nodes.iter_mut().filter(|n| !n.is_virtual && n.iface.has_common_width()) {
+    for node in nodes
+        .iter_mut()
+        .filter(|n| !n.is_virtual && n.iface.has_common_width())
+    {
         let w = *node.width.get_or_insert(1);
         if let Some(block) = node.block.as_mut() {
             block.set_width(w).map_err(|m| {
-                Diagnostic::at(&node.flat.spec.pos, format!("block `{}` ({}): {m}", node.flat.path, node.flat.spec.type_name))
+                Diagnostic::at(
+                    &node.flat.spec.pos,
+                    format!(
+                        "block `{}` ({}): {m}",
+                        node.flat.path, node.flat.spec.type_name
+                    ),
+                )
             })?;
         }
     }
@@ -369,10 +463,18 @@ fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>, Diagnosti
             }
         }
     }
-    let mut indegree: Vec<usize> =
-        ids.iter().map(|&n| graph.neighbors_directed(n, petgraph::Direction::Incoming).count()).collect();
-    let mut ready: BinaryHeap<Reverse<usize>> =
-        (0..nodes.len()).filter(|&i| indegree[i] == 0 && !nodes[i].is_virtual).map(Reverse).collect();
+    let mut indegree: Vec<usize> = ids
+        .iter()
+        .map(|&n| {
+            graph
+                .neighbors_directed(n, petgraph::Direction::Incoming)
+                .count()
+        })
+        .collect();
+    let mut ready: BinaryHeap<Reverse<usize>> = (0..nodes.len())
+        .filter(|&i| indegree[i] == 0 && !nodes[i].is_virtual)
+        .map(Reverse)
+        .collect();
     let mut order = Vec::with_capacity(nodes.len());
     while let Some(Reverse(i)) = ready.pop() {
         order.push(i);
@@ -395,13 +497,24 @@ fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>, Diagnosti
         let self_loop = scc.len() == 1 && graph.contains_edge(scc[0], scc[0]);
         if scc.len() > 1 || self_loop {
             let cycle = cycle_through(&graph, ids[first], &scc);
-            loops.push(cycle.iter().map(|&n| nodes[graph[n]].flat.path.as_str()).collect::<Vec<_>>());
+            loops.push(
+                cycle
+                    .iter()
+                    .map(|&n| nodes[graph[n]].flat.path.as_str())
+                    .collect::<Vec<_>>(),
+            );
         }
     }
     loops.sort();
     let first_block = loops.first().and_then(|l| l.first()).copied().unwrap_or("");
-    let pos = nodes.iter().find(|n| n.flat.path == first_block).map(|n| n.flat.spec.pos.clone());
-    let text: Vec<String> = loops.iter().map(|l| format!("{} -> {}", l.join(" -> "), l[0])).collect();
+    let pos = nodes
+        .iter()
+        .find(|n| n.flat.path == first_block)
+        .map(|n| n.flat.spec.pos.clone());
+    let text: Vec<String> = loops
+        .iter()
+        .map(|l| format!("{} -> {}", l.join(" -> "), l[0]))
+        .collect();
     let message = format!("algebraic loop: {}", text.join("; "));
     let hint = "every block on the loop has direct feedthrough; break it with a block that has none \
                 (unit_delay, integrator, a strictly proper transfer_function, an observer)";
@@ -413,7 +526,11 @@ fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>, Diagnosti
 }
 
 /// A simple cycle from `start` back to itself inside one component.
-fn cycle_through(graph: &DiGraph<usize, ()>, start: NodeIndex, scc: &[NodeIndex]) -> Vec<NodeIndex> {
+fn cycle_through(
+    graph: &DiGraph<usize, ()>,
+    start: NodeIndex,
+    scc: &[NodeIndex],
+) -> Vec<NodeIndex> {
     let mut parent: HashMap<NodeIndex, NodeIndex> = HashMap::new();
     let mut queue = std::collections::VecDeque::from([start]);
     while let Some(n) = queue.pop_front() {
@@ -429,10 +546,8 @@ fn cycle_through(graph: &DiGraph<usize, ()>, start: NodeIndex, scc: &[NodeIndex]
                 return path;
             }
             if let std::collections::hash_map::Entry::Vacant(e) = parent.entry(s) {
-                if s != start {
-                    e.insert(n);
-                    queue.push_back(s);
-                }
+                e.insert(n);
+                queue.push_back(s);
             }
         }
     }
@@ -448,13 +563,14 @@ fn resolve_rates(
 ) -> (HashMap<usize, Rate>, Vec<(f64, f64)>) {
     let mut clocks: Vec<(f64, f64)> = Vec::new();
     let mut rates: HashMap<usize, Rate> = HashMap::new();
-    let mut clock = |period: f64, offset: f64| match clocks.iter().position(|&c| c == (period, offset)) {
-        Some(c) => c,
-        None => {
-            clocks.push((period, offset));
-            clocks.len() - 1
-        }
-    };
+    let mut clock =
+        |period: f64, offset: f64| match clocks.iter().position(|&c| c == (period, offset)) {
+            Some(c) => c,
+            None => {
+                clocks.push((period, offset));
+                clocks.len() - 1
+            }
+        };
     for &i in order {
         let has_states = nodes[i].block.as_ref().is_some_and(|b| b.num_states() > 0);
         let rate = match nodes[i].iface.sample_time {
@@ -495,11 +611,17 @@ fn record_columns(
         if columns.iter().any(|c| c.name == name) {
             let message = format!("`{name}` is recorded twice");
             return Err(match pos {
-                Some(p) => Diagnostic::at(p, message).with_hint("rename one: `other_name: block.port`"),
+                Some(p) => {
+                    Diagnostic::at(p, message).with_hint("rename one: `other_name: block.port`")
+                }
                 None => Diagnostic::plain(message),
             });
         }
-        columns.push(Column { name, offset: port.offset, width: port.width });
+        columns.push(Column {
+            name,
+            offset: port.offset,
+            width: port.width,
+        });
         Ok(())
     };
     if g.records.is_empty() {
@@ -508,8 +630,11 @@ fn record_columns(
                 continue;
             }
             for (p, port) in n.iface.outputs.iter().enumerate() {
-                let name =
-                    if n.iface.outputs.len() == 1 { n.flat.path.clone() } else { format!("{}.{}", n.flat.path, port.name) };
+                let name = if n.iface.outputs.len() == 1 {
+                    n.flat.path.clone()
+                } else {
+                    format!("{}.{}", n.flat.path, port.name)
+                };
                 push(name, out_offset[&(i, p)], None)?;
             }
         }
@@ -519,16 +644,25 @@ fn record_columns(
         let mut target = ep.clone();
         if let Some((_, outs)) = g.subsystems.get(&ep.block) {
             let port = resolve_sub_port(ep, outs, "outport")?;
-            target = Endpoint { block: format!("{}/{port}", ep.block), port: None, pos: ep.pos.clone() };
+            target = Endpoint {
+                block: format!("{}/{port}", ep.block),
+                port: None,
+                pos: ep.pos.clone(),
+            };
         }
         let Some(&i) = index.get(target.block.as_str()) else {
-            return Err(Diagnostic::at(&ep.pos, format!("record: no block named `{}`", ep.block))
-                .suggest(&ep.block, index.keys().copied()));
+            return Err(
+                Diagnostic::at(&ep.pos, format!("record: no block named `{}`", ep.block))
+                    .suggest(&ep.block, index.keys().copied()),
+            );
         };
         let (mut src, mut port) = (i, port_index(&nodes[i], &target, false)?);
         while nodes[src].is_virtual {
             let Some(d) = &direct[src][0] else {
-                return Err(Diagnostic::at(&ep.pos, format!("record: `{}` is not wired", nodes[src].flat.path)));
+                return Err(Diagnostic::at(
+                    &ep.pos,
+                    format!("record: `{}` is not wired", nodes[src].flat.path),
+                ));
             };
             (src, port) = (d.src, d.port);
         }

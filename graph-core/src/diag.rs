@@ -19,7 +19,11 @@ impl Pos {
 
     /// The position `n` characters further along the same line.
     pub fn shifted(&self, n: usize) -> Pos {
-        Pos { file: self.file.clone(), line: self.line, col: self.col + n as u32 }
+        Pos {
+            file: self.file.clone(),
+            line: self.line,
+            col: self.col + n as u32,
+        }
     }
 }
 
@@ -41,17 +45,32 @@ pub struct Diagnostic {
 
 impl Diagnostic {
     pub fn at(pos: &Pos, message: impl Into<String>) -> Self {
-        Diagnostic { pos: Some(pos.clone()), file: None, message: message.into(), hint: None }
+        Diagnostic {
+            pos: Some(pos.clone()),
+            file: None,
+            message: message.into(),
+            hint: None,
+        }
     }
 
     /// An error about a whole file (cannot be read, for example).
     pub fn in_file(file: &str, message: impl Into<String>) -> Self {
-        Diagnostic { pos: None, file: Some(file.into()), message: message.into(), hint: None }
+        Diagnostic {
+            pos: None,
+            file: Some(file.into()),
+            message: message.into(),
+            hint: None,
+        }
     }
 
     /// An error with no file to point at (a command-line argument).
     pub fn plain(message: impl Into<String>) -> Self {
-        Diagnostic { pos: None, file: None, message: message.into(), hint: None }
+        Diagnostic {
+            pos: None,
+            file: None,
+            message: message.into(),
+            hint: None,
+        }
     }
 
     pub fn with_hint(mut self, hint: impl Into<String>) -> Self {
@@ -61,7 +80,11 @@ impl Diagnostic {
 
     /// Adds a hint unless there is one already.
     pub fn or_hint(self, hint: impl Into<String>) -> Self {
-        if self.hint.is_some() { self } else { self.with_hint(hint) }
+        if self.hint.is_some() {
+            self
+        } else {
+            self.with_hint(hint)
+        }
     }
 
     /// Adds a "did you mean" hint when a candidate is close enough to `got`.
@@ -113,7 +136,10 @@ mod tests {
     #[test]
     fn suggestions_catch_typos_only() {
         let types = ["transfer_function", "gain", "sum", "saturation"];
-        assert_eq!(closest("tranfer_function", types), Some("transfer_function"));
+        assert_eq!(
+            closest("tranfer_function", types),
+            Some("transfer_function")
+        );
         assert_eq!(closest("gian", types), Some("gain"));
         assert_eq!(closest("integrator", types), None);
     }

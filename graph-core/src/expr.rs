@@ -11,7 +11,7 @@
 //!
 //! `-2^2` is −4 (as in MATLAB and mathematics). Functions: `sqrt exp ln log10
 //! sin cos tan asin acos atan sinh cosh tanh abs sign floor ceil` of one
-//! argument, `atan2 pow` of two, `min max` of one or more; constant `pi`.
+//! argument, `atan2 pow` of two, `min max` of one or more; constants `pi` and `inf`.
 //! Parsing resolves every name once, to a constant or to a variable slot, so
 //! evaluation does no lookups and allocates nothing.
 
@@ -120,10 +120,18 @@ impl Expr {
     /// Parses `src`, resolving names through `scope`.
     pub fn parse(src: &str, scope: &dyn Scope) -> Result<Expr, ExprError> {
         let tokens = lex(src)?;
-        let mut p = Parser { tokens, at: 0, scope, len: src.chars().count() };
+        let mut p = Parser {
+            tokens,
+            at: 0,
+            scope,
+            len: src.chars().count(),
+        };
         let root = p.expr()?;
         if let Some(tok) = p.peek() {
-            return Err(p.error_at(tok.offset, format!("unexpected {} after the end of the expression", tok.kind)));
+            return Err(p.error_at(
+                tok.offset,
+                format!("unexpected {} after the end of the expression", tok.kind),
+            ));
         }
         Ok(Expr { root: fold(root) })
     }
@@ -134,6 +142,20 @@ impl Expr {
             Node::Const(v) => Some(v),
             _ => None,
         }
+    }
+
+    /// Whether the expression reads variable slot `slot`.
+    pub fn uses_slot(&self, slot: usize) -> bool {
+        fn walk(n: &Node, slot: usize) -> bool {
+            match n {
+                Node::Const(_) => false,
+                Node::Var(i) => *i == slot,
+                Node::Neg(a) | Node::Call(_, a) => walk(a, slot),
+                Node::Bin(_, a, b) | Node::Atan2(a, b) => walk(a, slot) || walk(b, slot),
+                Node::MinMax { args, .. } => args.iter().any(|a| walk(a, slot)),
+            }
+        }
+        walk(&self.root, slot)
     }
 
     /// Evaluates with `vars` bound to the slots handed out by the scope.
@@ -192,7 +214,11 @@ fn eval(node: &Node, vars: &[f64]) -> f64 {
         Node::MinMax { max, args } => {
             let mut it = args.iter().map(|a| eval(a, vars));
             let first = it.next().unwrap_or(f64::NAN);
-            if *max { it.fold(first, f64::max) } else { it.fold(first, f64::min) }
+            if *max {
+                it.fold(first, f64::max)
+            } else {
+                it.fold(first, f64::min)
+            }
         }
     }
 }
@@ -204,17 +230,26 @@ fn fold(node: Node) -> Node {
         Node::Bin(op, a, b) => Node::Bin(op, Box::new(fold(*a)), Box::new(fold(*b))),
         Node::Call(f, a) => Node::Call(f, Box::new(fold(*a))),
         Node::Atan2(a, b) => Node::Atan2(Box::new(fold(*a)), Box::new(fold(*b))),
-        Node::MinMax { max, args } => Node::MinMax { max, args: args.into_iter().map(fold).collect() },
+        Node::MinMax { max, args } => Node::MinMax {
+            max,
+            args: args.into_iter().map(fold).collect(),
+        },
         leaf => leaf,
     };
     let is_const = match &folded {
         Node::Const(_) => return folded,
         Node::Var(_) => false,
         Node::Neg(a) | Node::Call(_, a) => matches!(**a, Node::Const(_)),
-        Node::Bin(_, a, b) | Node::Atan2(a, b) => matches!((&**a, &**b), (Node::Const(_), Node::Const(_))),
+        Node::Bin(_, a, b) | Node::Atan2(a, b) => {
+            matches!((&**a, &**b), (Node::Const(_), Node::Const(_)))
+        }
         Node::MinMax { args, .. } => args.iter().all(|a| matches!(a, Node::Const(_))),
     };
-    if is_const { Node::Const(eval(&folded, &[])) } else { folded }
+    if is_const {
+        Node::Const(eval(&folded, &[]))
+    } else {
+        folded
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -247,7 +282,9 @@ fn lex(src: &str) -> Result<Vec<Tok>, ExprError> {
         let c = chars[i];
         if c.is_whitespace() {
             i += 1;
-        } else if c.is_ascii_digit() || (c == '.' && chars.get(i + 1).is_some_and(char::is_ascii_digit)) {
+        } else if c.is_ascii_digit()
+            || (c == '.' && chars.get(i + 1).is_some_and(char::is_ascii_digit))
+        {
             let start = i;
             while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
                 i += 1;
@@ -271,18 +308,31 @@ fn lex(src: &str) -> Result<Vec<Tok>, ExprError> {
                 message: format!("`{text}` is not a number"),
                 hint: None,
             })?;
-            out.push(Tok { kind: TokKind::Num(v), offset: start });
+            out.push(Tok {
+                kind: TokKind::Num(v),
+                offset: start,
+            });
         } else if c.is_alphabetic() || c == '_' {
             let start = i;
             while i < chars.len() && (chars[i].is_alphanumeric() || chars[i] == '_') {
                 i += 1;
             }
-            out.push(Tok { kind: TokKind::Name(chars[start..i].iter().collect()), offset: start });
+            out.push(Tok {
+                kind: TokKind::Name(chars[start..i].iter().collect()),
+                offset: start,
+            });
         } else if "+-*/^(),".contains(c) {
-            out.push(Tok { kind: TokKind::Sym(c), offset: i });
+            out.push(Tok {
+                kind: TokKind::Sym(c),
+                offset: i,
+            });
             i += 1;
         } else {
-            return Err(ExprError { offset: i, message: format!("unexpected character `{c}`"), hint: None });
+            return Err(ExprError {
+                offset: i,
+                message: format!("unexpected character `{c}`"),
+                hint: None,
+            });
         }
     }
     Ok(out)
@@ -310,7 +360,11 @@ impl Parser<'_> {
     }
 
     fn error_at(&self, offset: usize, message: String) -> ExprError {
-        ExprError { offset, message, hint: None }
+        ExprError {
+            offset,
+            message,
+            hint: None,
+        }
     }
 
     fn end_offset(&self) -> usize {
@@ -321,8 +375,13 @@ impl Parser<'_> {
         if self.eat(sym) {
             return Ok(());
         }
-        let found = self.peek().map_or("the end".to_string(), |t| t.kind.to_string());
-        Err(self.error_at(self.end_offset(), format!("expected `{sym}`, found {found}")))
+        let found = self
+            .peek()
+            .map_or("the end".to_string(), |t| t.kind.to_string());
+        Err(self.error_at(
+            self.end_offset(),
+            format!("expected `{sym}`, found {found}"),
+        ))
     }
 
     fn expr(&mut self) -> Result<Node, ExprError> {
@@ -391,7 +450,10 @@ impl Parser<'_> {
                     self.name(&name, offset)
                 }
             }
-            other => Err(self.error_at(offset, format!("expected a number, a name or `(`, found {other}"))),
+            other => Err(self.error_at(
+                offset,
+                format!("expected a number, a name or `(`, found {other}"),
+            )),
         }
     }
 
@@ -400,14 +462,22 @@ impl Parser<'_> {
             Some(Binding::Value(v)) => Ok(Node::Const(v)),
             Some(Binding::Slot(i)) => Ok(Node::Var(i)),
             None if name == "pi" => Ok(Node::Const(std::f64::consts::PI)),
+            None if name == "inf" => Ok(Node::Const(f64::INFINITY)),
             None => {
                 let names = self.scope.names();
-                let hint = crate::diag::closest(name, names.iter().map(String::as_str).chain(["pi"]))
-                    .map(|c| format!("did you mean `{c}`?"))
-                    .or_else(|| {
-                        (!names.is_empty()).then(|| format!("known names here: {}", names.join(", ")))
-                    });
-                Err(ExprError { offset, message: format!("unknown name `{name}`"), hint })
+                let hint = crate::diag::closest(
+                    name,
+                    names.iter().map(String::as_str).chain(["pi", "inf"]),
+                )
+                .map(|c| format!("did you mean `{c}`?"))
+                .or_else(|| {
+                    (!names.is_empty()).then(|| format!("known names here: {}", names.join(", ")))
+                });
+                Err(ExprError {
+                    offset,
+                    message: format!("unknown name `{name}`"),
+                    hint,
+                })
             }
         }
     }
@@ -435,7 +505,9 @@ impl Parser<'_> {
                 return Err(arity_error("two arguments"));
             }
             let (b, a) = (args.pop(), args.pop());
-            let (Some(a), Some(b)) = (a, b) else { return Err(arity_error("two arguments")) };
+            let (Some(a), Some(b)) = (a, b) else {
+                return Err(arity_error("two arguments"));
+            };
             return Ok(if name == "atan2" {
                 Node::Atan2(Box::new(a), Box::new(b))
             } else {
@@ -443,11 +515,18 @@ impl Parser<'_> {
             });
         }
         if VARIADIC.contains(&name) {
-            return Ok(Node::MinMax { max: name == "max", args });
+            return Ok(Node::MinMax {
+                max: name == "max",
+                args,
+            });
         }
         let all = FUNC1.iter().map(|(n, _)| *n).chain(FUNC2).chain(VARIADIC);
         let hint = crate::diag::closest(name, all).map(|c| format!("did you mean `{c}`?"));
-        Err(ExprError { offset, message: format!("unknown function `{name}`"), hint })
+        Err(ExprError {
+            offset,
+            message: format!("unknown function `{name}`"),
+            hint,
+        })
     }
 }
 
@@ -456,7 +535,11 @@ pub struct Constants<'a>(pub &'a [(String, f64)]);
 
 impl Scope for Constants<'_> {
     fn lookup(&self, name: &str) -> Option<Binding> {
-        self.0.iter().rev().find(|(n, _)| n == name).map(|&(_, v)| Binding::Value(v))
+        self.0
+            .iter()
+            .rev()
+            .find(|(n, _)| n == name)
+            .map(|&(_, v)| Binding::Value(v))
     }
     fn names(&self) -> Vec<String> {
         self.0.iter().map(|(n, _)| n.clone()).collect()
@@ -469,7 +552,10 @@ mod tests {
 
     fn val(src: &str) -> f64 {
         let scope: Vec<(String, f64)> = vec![("h".into(), 1e-4), ("w0".into(), 1000.0)];
-        Expr::parse(src, &Constants(&scope)).unwrap().constant().unwrap()
+        Expr::parse(src, &Constants(&scope))
+            .unwrap()
+            .constant()
+            .unwrap()
     }
 
     #[test]
@@ -488,7 +574,10 @@ mod tests {
         assert_eq!(val("5*h"), 5e-4);
         assert_eq!(val("3*w0"), 3000.0);
         assert_eq!(val("w0^2"), 1e6);
-        assert_eq!(val("sqrt(16) + abs(-2) + max(1, 7, 3) + min(4, 2)"), 4.0 + 2.0 + 7.0 + 2.0);
+        assert_eq!(
+            val("sqrt(16) + abs(-2) + max(1, 7, 3) + min(4, 2)"),
+            4.0 + 2.0 + 7.0 + 2.0
+        );
         assert!((val("atan2(1, 1)") - std::f64::consts::FRAC_PI_4).abs() < 1e-15);
         assert!((val("sin(pi/2) + cos(0) + tan(0) + exp(0) + ln(1)") - 3.0).abs() < 1e-15);
         assert_eq!(val("1.5e3 + .5 + 2E-1"), 1500.7);
@@ -526,7 +615,11 @@ mod tests {
             ("1 +", 3, "expression ends too early"),
             ("(1 + 2", 6, "expected `)`, found the end"),
             ("2 $ 3", 2, "unexpected character `$`"),
-            ("1 2", 2, "unexpected number 2 after the end of the expression"),
+            (
+                "1 2",
+                2,
+                "unexpected number 2 after the end of the expression",
+            ),
             ("sqr(2)", 0, "unknown function `sqr`"),
             ("atan2(1)", 0, "`atan2` takes two arguments, got 1"),
         ];

@@ -69,26 +69,44 @@ enum Override {
 /// pairs; naming a parameter the graph does not have is an error.
 pub fn load(path: &Path, overrides: &[(String, String)]) -> Result<FlatGraph, Diagnostic> {
     let file: Arc<str> = path.display().to_string().into();
-    let text = std::fs::read_to_string(path).map_err(|e| Diagnostic::in_file(&file, format!("cannot read: {e}")))?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| Diagnostic::in_file(&file, format!("cannot read: {e}")))?;
     load_str(&text, file, overrides)
 }
 
 /// Like [`load`] for text already in memory; `file` names it in messages
 /// and locates relative paths.
-pub fn load_str(text: &str, file: Arc<str>, overrides: &[(String, String)]) -> Result<FlatGraph, Diagnostic> {
+pub fn load_str(
+    text: &str,
+    file: Arc<str>,
+    overrides: &[(String, String)],
+) -> Result<FlatGraph, Diagnostic> {
     let graph = GraphFile::parse(text, file.clone())?;
-    let known: Vec<&str> = graph.parameters.iter().map(|(k, _)| k.name.as_str()).collect();
+    let known: Vec<&str> = graph
+        .parameters
+        .iter()
+        .map(|(k, _)| k.name.as_str())
+        .collect();
     for (name, _) in overrides {
         if !known.contains(&name.as_str()) {
-            return Err(Diagnostic::plain(format!("--set {name}: {file} has no parameter `{name}`"))
-                .suggest(name, known.iter().copied()));
+            return Err(Diagnostic::plain(format!(
+                "--set {name}: {file} has no parameter `{name}`"
+            ))
+            .suggest(name, known.iter().copied()));
         }
     }
-    let ovr: Vec<(String, Override, Option<Pos>)> =
-        overrides.iter().map(|(n, v)| (n.clone(), Override::Text(v.clone()), None)).collect();
+    let ovr: Vec<(String, Override, Option<Pos>)> = overrides
+        .iter()
+        .map(|(n, v)| (n.clone(), Override::Text(v.clone()), None))
+        .collect();
     let scope = Arc::new(eval_parameters(&graph.parameters, &ovr)?);
     let sim = sim_config(graph.simulation.as_ref(), &scope)?;
-    let dir = Arc::new(Path::new(&*file).parent().map(Path::to_path_buf).unwrap_or_default());
+    let dir = Arc::new(
+        Path::new(&*file)
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default(),
+    );
     let mut out = FlatGraph {
         file: file.clone(),
         name: graph.name.clone(),
@@ -124,7 +142,8 @@ fn eval_parameters(
             Some((name, Override::Text(text), _)) => {
                 let at = Pos::new(format!("--set {name}=").into(), 1, 1);
                 eval_number(text, &at, &scope).map_err(|d| {
-                    Diagnostic::plain(format!("--set {name}={text}: {}", d.message)).with_hint(d.hint.unwrap_or_default())
+                    Diagnostic::plain(format!("--set {name}={text}: {}", d.message))
+                        .with_hint(d.hint.unwrap_or_default())
                 })?
             }
             None => match &value.kind {
@@ -136,7 +155,11 @@ fn eval_parameters(
                 _ => {
                     return Err(Diagnostic::at(
                         &value.pos,
-                        format!("parameter `{}` must be a number or an expression, found {}", key.name, value.describe()),
+                        format!(
+                            "parameter `{}` must be a number or an expression, found {}",
+                            key.name,
+                            value.describe()
+                        ),
                     ));
                 }
             },
@@ -160,7 +183,10 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
         match &v.kind {
             Kind::Num(x) => Ok(*x),
             Kind::Str(s) => eval_number(s, &v.pos, scope),
-            _ => Err(Diagnostic::at(&v.pos, format!("{what} must be a number, found {}", v.describe()))),
+            _ => Err(Diagnostic::at(
+                &v.pos,
+                format!("{what} must be a number, found {}", v.describe()),
+            )),
         }
     };
     let positive = |v: &Yaml, what: &str| -> Result<f64, Diagnostic> {
@@ -168,7 +194,10 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
         if x > 0.0 && x.is_finite() {
             Ok(x)
         } else {
-            Err(Diagnostic::at(&v.pos, format!("{what} must be a positive number, got {x}")))
+            Err(Diagnostic::at(
+                &v.pos,
+                format!("{what} must be a positive number, got {x}"),
+            ))
         }
     };
     let stop = match yaml::lookup(entries, "stop") {
@@ -179,7 +208,10 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
         Some(v) => {
             let s = num(v, "`simulation.seed`")?;
             if s < 0.0 || s.fract() != 0.0 || s > 9.0e15 {
-                return Err(Diagnostic::at(&v.pos, format!("`seed` must be a whole number >= 0, got {s}")));
+                return Err(Diagnostic::at(
+                    &v.pos,
+                    format!("`seed` must be a whole number >= 0, got {s}"),
+                ));
             }
             s as u64
         }
@@ -193,27 +225,46 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
                 Kind::Map(m) => {
                     check_keys(m, &SOLVER_KEYS, "simulation.solver")?;
                     match yaml::lookup(m, "method") {
-                        Some(mv) => (mv.expect_str("`solver.method`")?, Some(mv.pos.clone()), m.as_slice()),
+                        Some(mv) => (
+                            mv.expect_str("`solver.method`")?,
+                            Some(mv.pos.clone()),
+                            m.as_slice(),
+                        ),
                         None => ("dopri5", None, m.as_slice()),
                     }
                 }
-                _ => return Err(Diagnostic::at(&v.pos, "`solver` must be a method name or a mapping")),
+                _ => {
+                    return Err(Diagnostic::at(
+                        &v.pos,
+                        "`solver` must be a method name or a mapping",
+                    ));
+                }
             },
         };
     let opt = |key: &str| -> Result<Option<f64>, Diagnostic> {
-        yaml::lookup(solver_entries, key).map(|v| positive(v, &format!("`solver.{key}`"))).transpose()
+        yaml::lookup(solver_entries, key)
+            .map(|v| positive(v, &format!("`solver.{key}`")))
+            .transpose()
     };
     let fixed_step = |name: &str| -> Result<f64, Diagnostic> {
         opt("step")?.ok_or_else(|| {
-            let pos = method_pos.clone().unwrap_or_else(|| Pos::new("?".into(), 0, 0));
-            Diagnostic::at(&pos, format!("the fixed-step method `{name}` needs a `step`"))
-                .with_hint(format!("solver: {{ method: {name}, step: 1.0e-4 }}"))
+            let pos = method_pos
+                .clone()
+                .unwrap_or_else(|| Pos::new("?".into(), 0, 0));
+            Diagnostic::at(
+                &pos,
+                format!("the fixed-step method `{name}` needs a `step`"),
+            )
+            .with_hint(format!("solver: {{ method: {name}, step: 1.0e-4 }}"))
         })
     };
     let method = match method_name {
         "dopri5" | "ode45" => {
             if let Some(v) = yaml::lookup(solver_entries, "step") {
-                return Err(Diagnostic::at(&v.pos, "dopri5 chooses its own steps: use `max_step` (or a fixed-step method)"));
+                return Err(Diagnostic::at(
+                    &v.pos,
+                    "dopri5 chooses its own steps: use `max_step` (or a fixed-step method)",
+                ));
             }
             Method::DormandPrince {
                 rtol: opt("rtol")?.unwrap_or(1e-6),
@@ -222,20 +273,31 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
                 initial_step: opt("initial_step")?,
             }
         }
-        "rk4" => Method::Rk4 { step: fixed_step("rk4")? },
-        "heun" => Method::Heun { step: fixed_step("heun")? },
-        "euler" => Method::Euler { step: fixed_step("euler")? },
+        "rk4" => Method::Rk4 {
+            step: fixed_step("rk4")?,
+        },
+        "heun" => Method::Heun {
+            step: fixed_step("heun")?,
+        },
+        "euler" => Method::Euler {
+            step: fixed_step("euler")?,
+        },
         other => {
             let pos = method_pos.unwrap_or_else(|| Pos::new("?".into(), 0, 0));
-            return Err(Diagnostic::at(&pos, format!("unknown solver method `{other}`"))
-                .suggest(other, METHODS)
-                .or_hint(format!("methods: {}", METHODS.join(", "))));
+            return Err(
+                Diagnostic::at(&pos, format!("unknown solver method `{other}`"))
+                    .suggest(other, METHODS)
+                    .or_hint(format!("methods: {}", METHODS.join(", "))),
+            );
         }
     };
     if !method.is_adaptive() {
         for key in ["rtol", "atol", "max_step", "initial_step"] {
             if let Some(v) = yaml::lookup(solver_entries, key) {
-                return Err(Diagnostic::at(&v.pos, format!("`{key}` applies to dopri5, not to `{method_name}`")));
+                return Err(Diagnostic::at(
+                    &v.pos,
+                    format!("`{key}` applies to dopri5, not to `{method_name}`"),
+                ));
             }
         }
     }
@@ -245,9 +307,11 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
 fn check_keys(entries: &[(Key, Yaml)], known: &[&str], section: &str) -> Result<(), Diagnostic> {
     for (k, _) in entries {
         if !known.contains(&k.name.as_str()) {
-            return Err(Diagnostic::at(&k.pos, format!("unknown key `{}` in `{section}`", k.name))
-                .suggest(&k.name, known.iter().copied())
-                .or_hint(format!("`{section}` takes: {}", known.join(", "))));
+            return Err(
+                Diagnostic::at(&k.pos, format!("unknown key `{}` in `{section}`", k.name))
+                    .suggest(&k.name, known.iter().copied())
+                    .or_hint(format!("`{section}` takes: {}", known.join(", "))),
+            );
         }
     }
     Ok(())
@@ -255,7 +319,13 @@ fn check_keys(entries: &[(Key, Yaml)], known: &[&str], section: &str) -> Result<
 
 /// A subsystem's ports: the names of its inport and outport blocks, in order.
 fn sub_ports(g: &GraphFile) -> (Vec<String>, Vec<String>) {
-    let of = |ty: &str| g.blocks.iter().filter(|b| b.type_name == ty).map(|b| b.name.clone()).collect();
+    let of = |ty: &str| {
+        g.blocks
+            .iter()
+            .filter(|b| b.type_name == ty)
+            .map(|b| b.name.clone())
+            .collect()
+    };
     (of(INPORT), of(OUTPORT))
 }
 
@@ -271,7 +341,12 @@ fn expand(
     for b in &g.blocks {
         let path = format!("{prefix}{}", b.name);
         if b.type_name != SUBSYSTEM {
-            out.blocks.push(FlatBlock { path, spec: b.clone(), scope: scope.clone(), dir: dir.clone() });
+            out.blocks.push(FlatBlock {
+                path,
+                spec: b.clone(),
+                scope: scope.clone(),
+                dir: dir.clone(),
+            });
             continue;
         }
         let inner = load_subsystem(b, &path, &scope, &dir, out, stack)?;
@@ -281,36 +356,68 @@ fn expand(
     let names: Vec<&str> = g.blocks.iter().map(|b| b.name.as_str()).collect();
     let resolve = |ep: &Endpoint, is_src: bool| -> Result<Endpoint, Diagnostic> {
         if !names.contains(&ep.block.as_str()) {
-            return Err(Diagnostic::at(&ep.pos, format!("wire: no block named `{}`", ep.block))
-                .suggest(&ep.block, names.iter().copied()));
+            return Err(
+                Diagnostic::at(&ep.pos, format!("wire: no block named `{}`", ep.block))
+                    .suggest(&ep.block, names.iter().copied()),
+            );
         }
         let Some((ins, outs)) = subs.get(ep.block.as_str()) else {
-            return Ok(Endpoint { block: format!("{prefix}{}", ep.block), ..ep.clone() });
+            return Ok(Endpoint {
+                block: format!("{prefix}{}", ep.block),
+                ..ep.clone()
+            });
         };
-        let (ports, side) = if is_src { (outs, "outport") } else { (ins, "inport") };
+        let (ports, side) = if is_src {
+            (outs, "outport")
+        } else {
+            (ins, "inport")
+        };
         let port = resolve_sub_port(ep, ports, side)?;
-        Ok(Endpoint { block: format!("{prefix}{}/{port}", ep.block), port: None, pos: ep.pos.clone() })
+        Ok(Endpoint {
+            block: format!("{prefix}{}/{port}", ep.block),
+            port: None,
+            pos: ep.pos.clone(),
+        })
     };
     for w in &g.wires {
         let src = resolve(&w.src, true)?;
         for d in &w.dsts {
-            out.wires.push(FlatWire { src: src.clone(), dst: resolve(d, false)? });
+            out.wires.push(FlatWire {
+                src: src.clone(),
+                dst: resolve(d, false)?,
+            });
         }
     }
     Ok(())
 }
 
 /// Which inport/outport block of a subsystem an endpoint means.
-pub fn resolve_sub_port<'a>(ep: &Endpoint, ports: &'a [String], side: &str) -> Result<&'a str, Diagnostic> {
+pub fn resolve_sub_port<'a>(
+    ep: &Endpoint,
+    ports: &'a [String],
+    side: &str,
+) -> Result<&'a str, Diagnostic> {
     match &ep.port {
-        Some(p) => ports.iter().find(|n| *n == p).map(String::as_str).ok_or_else(|| {
-            Diagnostic::at(&ep.pos, format!("subsystem `{}` has no {side} `{p}`", ep.block))
+        Some(p) => ports
+            .iter()
+            .find(|n| *n == p)
+            .map(String::as_str)
+            .ok_or_else(|| {
+                Diagnostic::at(
+                    &ep.pos,
+                    format!("subsystem `{}` has no {side} `{p}`", ep.block),
+                )
                 .suggest(p, ports.iter().map(String::as_str))
-        }),
+            }),
         None if ports.len() == 1 => Ok(&ports[0]),
         None => Err(Diagnostic::at(
             &ep.pos,
-            format!("subsystem `{}` has {} {side}s: name one as `{}.PORT`", ep.block, ports.len(), ep.block),
+            format!(
+                "subsystem `{}` has {} {side}s: name one as `{}.PORT`",
+                ep.block,
+                ports.len(),
+                ep.block
+            ),
         )
         .with_hint(format!("{side}s: {}", ports.join(", ")))),
     }
@@ -329,31 +436,52 @@ fn load_subsystem(
     let what = format!("block `{path}` (subsystem)");
     check_keys(&b.params, &SUBSYSTEM_KEYS, &what)?;
     let Some(file_v) = yaml::lookup(&b.params, "file") else {
-        return Err(Diagnostic::at(&b.pos, format!("{what}: missing parameter `file`"))
-            .with_hint("the graph file to include, relative to this file"));
+        return Err(
+            Diagnostic::at(&b.pos, format!("{what}: missing parameter `file`"))
+                .with_hint("the graph file to include, relative to this file"),
+        );
     };
     let rel = file_v.expect_str(&format!("{what}: `file`"))?;
     let sub_path = dir.join(rel);
     let sub_file: Arc<str> = sub_path.display().to_string().into();
-    let text = std::fs::read_to_string(&sub_path)
-        .map_err(|e| Diagnostic::at(&file_v.pos, format!("{what}: cannot read `{sub_file}`: {e}")))?;
+    let text = std::fs::read_to_string(&sub_path).map_err(|e| {
+        Diagnostic::at(
+            &file_v.pos,
+            format!("{what}: cannot read `{sub_file}`: {e}"),
+        )
+    })?;
     let canon = canonical(&sub_path);
     if stack.contains(&canon) {
-        return Err(Diagnostic::at(&file_v.pos, format!("{what}: `{sub_file}` includes itself")));
+        return Err(Diagnostic::at(
+            &file_v.pos,
+            format!("{what}: `{sub_file}` includes itself"),
+        ));
     }
     let sub = GraphFile::parse(&text, sub_file.clone())?;
-    let known: Vec<&str> = sub.parameters.iter().map(|(k, _)| k.name.as_str()).collect();
+    let known: Vec<&str> = sub
+        .parameters
+        .iter()
+        .map(|(k, _)| k.name.as_str())
+        .collect();
     let mut overrides = Vec::new();
     if let Some(p) = yaml::lookup(&b.params, "parameters") {
         for (k, v) in p.expect_map(&format!("{what}: `parameters`"))? {
             if !known.contains(&k.name.as_str()) {
-                return Err(Diagnostic::at(&k.pos, format!("{what}: `{sub_file}` has no parameter `{}`", k.name))
-                    .suggest(&k.name, known.iter().copied()));
+                return Err(Diagnostic::at(
+                    &k.pos,
+                    format!("{what}: `{sub_file}` has no parameter `{}`", k.name),
+                )
+                .suggest(&k.name, known.iter().copied()));
             }
             let value = match &v.kind {
                 Kind::Num(x) => *x,
                 Kind::Str(s) => eval_number(s, &v.pos, scope)?,
-                _ => return Err(Diagnostic::at(&v.pos, format!("{what}: parameter `{}` must be a number", k.name))),
+                _ => {
+                    return Err(Diagnostic::at(
+                        &v.pos,
+                        format!("{what}: parameter `{}` must be a number", k.name),
+                    ));
+                }
             };
             overrides.push((k.name.clone(), Override::Value(value), Some(k.pos.clone())));
         }
@@ -372,6 +500,8 @@ pub fn parse_set(arg: &str) -> Result<(String, String), Diagnostic> {
         Some((n, v)) if !n.trim().is_empty() && !v.trim().is_empty() => {
             Ok((n.trim().to_string(), v.trim().to_string()))
         }
-        _ => Err(Diagnostic::plain(format!("--set {arg}: expected NAME=VALUE"))),
+        _ => Err(Diagnostic::plain(format!(
+            "--set {arg}: expected NAME=VALUE"
+        ))),
     }
 }

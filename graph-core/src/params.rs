@@ -35,7 +35,16 @@ impl<'a> Params<'a> {
         docs: &'static [ParamDoc],
     ) -> Self {
         let used = entries.iter().map(|(k, _)| k.name == "type").collect();
-        Params { block, type_name, block_pos, entries, scope, dir, docs, used }
+        Params {
+            block,
+            type_name,
+            block_pos,
+            entries,
+            scope,
+            dir,
+            docs,
+            used,
+        }
     }
 
     /// The block's full name (`outer/inner` inside subsystems).
@@ -68,12 +77,21 @@ impl<'a> Params<'a> {
             .iter()
             .find(|(k, _)| k.name == key)
             .map_or(self.block_pos, |(_, v)| &v.pos);
-        Diagnostic::at(pos, format!("block `{}` ({}): `{key}`: {message}", self.block, self.type_name))
+        Diagnostic::at(
+            pos,
+            format!(
+                "block `{}` ({}): `{key}`: {message}",
+                self.block, self.type_name
+            ),
+        )
     }
 
     /// An error about the block as a whole, at its name.
     pub fn block_error(&self, message: impl std::fmt::Display) -> Diagnostic {
-        Diagnostic::at(self.block_pos, format!("block `{}` ({}): {message}", self.block, self.type_name))
+        Diagnostic::at(
+            self.block_pos,
+            format!("block `{}` ({}): {message}", self.block, self.type_name),
+        )
     }
 
     fn missing(&self, key: &str) -> Diagnostic {
@@ -86,7 +104,10 @@ impl<'a> Params<'a> {
         match &v.kind {
             Kind::Num(x) => Ok(*x),
             Kind::Str(s) => eval_number(s, &v.pos, self.scope).map_err(|d| {
-                let message = format!("block `{}` ({}): `{key}`: {}", self.block, self.type_name, d.message);
+                let message = format!(
+                    "block `{}` ({}): `{key}`: {}",
+                    self.block, self.type_name, d.message
+                );
                 Diagnostic { message, ..d }
             }),
             _ => Err(self.error(key, format!("expected a number, found {}", v.describe()))),
@@ -125,7 +146,11 @@ impl<'a> Params<'a> {
             Some(d) => self.number_or(key, d)?,
             None => self.number(key)?,
         };
-        if ok(v) { Ok(v) } else { Err(self.error(key, format!("must be {requirement}, got {v}"))) }
+        if ok(v) {
+            Ok(v)
+        } else {
+            Err(self.error(key, format!("must be {requirement}, got {v}")))
+        }
     }
 
     /// A positive whole number.
@@ -157,15 +182,22 @@ impl<'a> Params<'a> {
         match &v.kind {
             Kind::Seq(items) => items.iter().map(|i| self.number_value(key, i)).collect(),
             Kind::Num(_) | Kind::Str(_) => Ok(vec![self.number_value(key, v)?]),
-            _ => Err(self.error(key, format!("expected a list of numbers, found {}", v.describe()))),
+            _ => Err(self.error(
+                key,
+                format!("expected a list of numbers, found {}", v.describe()),
+            )),
         }
     }
 
     /// A matrix as a list of rows; a list of numbers is one row, a number a 1×1.
     pub fn matrix(&mut self, key: &str) -> Result<Vec<Vec<f64>>, Diagnostic> {
-        let Some(v) = self.raw(key) else { return Err(self.missing(key)) };
+        let Some(v) = self.raw(key) else {
+            return Err(self.missing(key));
+        };
         match &v.kind {
-            Kind::Seq(rows) if rows.iter().all(|r| matches!(r.kind, Kind::Seq(_))) && !rows.is_empty() => {
+            Kind::Seq(rows)
+                if rows.iter().all(|r| matches!(r.kind, Kind::Seq(_))) && !rows.is_empty() =>
+            {
                 rows.iter().map(|r| self.vector_value(key, r)).collect()
             }
             Kind::Seq(rows) if rows.is_empty() => Ok(Vec::new()),
@@ -176,7 +208,9 @@ impl<'a> Params<'a> {
     /// A list whose items are numbers or `[re, im]` pairs (a complex
     /// number, standing for itself and its conjugate).
     pub fn roots(&mut self, key: &str) -> Result<Vec<(f64, f64)>, Diagnostic> {
-        let Some(v) = self.raw(key) else { return Ok(Vec::new()) };
+        let Some(v) = self.raw(key) else {
+            return Ok(Vec::new());
+        };
         let items = match &v.kind {
             Kind::Seq(items) => items.as_slice(),
             Kind::Null => return Ok(Vec::new()),
@@ -186,14 +220,20 @@ impl<'a> Params<'a> {
         for item in items {
             match &item.kind {
                 Kind::Seq(pair) if pair.len() == 2 => {
-                    let (re, im) = (self.number_value(key, &pair[0])?, self.number_value(key, &pair[1])?);
+                    let (re, im) = (
+                        self.number_value(key, &pair[0])?,
+                        self.number_value(key, &pair[1])?,
+                    );
                     out.push((re, im));
                     if im != 0.0 {
                         out.push((re, -im));
                     }
                 }
                 Kind::Seq(_) => {
-                    return Err(Diagnostic::at(&item.pos, "a complex root is written [re, im]".to_string()));
+                    return Err(Diagnostic::at(
+                        &item.pos,
+                        "a complex root is written [re, im]".to_string(),
+                    ));
                 }
                 _ => out.push((self.number_value(key, item)?, 0.0)),
             }
@@ -216,10 +256,17 @@ impl<'a> Params<'a> {
     }
 
     /// One of `options` (the first is the default).
-    pub fn choice(&mut self, key: &str, options: &[&'static str]) -> Result<&'static str, Diagnostic> {
-        let Some(s) = self.opt_string(key)? else { return Ok(options[0]) };
+    pub fn choice(
+        &mut self,
+        key: &str,
+        options: &[&'static str],
+    ) -> Result<&'static str, Diagnostic> {
+        let Some(s) = self.opt_string(key)? else {
+            return Ok(options[0]);
+        };
         options.iter().copied().find(|o| *o == s).ok_or_else(|| {
-            self.error(key, format!("`{s}` is not one of: {}", options.join(", "))).suggest(s, options.iter().copied())
+            self.error(key, format!("`{s}` is not one of: {}", options.join(", ")))
+                .suggest(s, options.iter().copied())
         })
     }
 
@@ -228,19 +275,27 @@ impl<'a> Params<'a> {
             None => Ok(default),
             Some(v) => match v.kind {
                 Kind::Bool(b) => Ok(b),
-                _ => Err(self.error(key, format!("expected true or false, found {}", v.describe()))),
+                _ => Err(self.error(
+                    key,
+                    format!("expected true or false, found {}", v.describe()),
+                )),
             },
         }
     }
 
     /// A list of strings (a single string is a list of one).
     pub fn strings(&mut self, key: &str) -> Result<Vec<&'a str>, Diagnostic> {
-        let Some(v) = self.raw(key) else { return Ok(Vec::new()) };
+        let Some(v) = self.raw(key) else {
+            return Ok(Vec::new());
+        };
         let items = match &v.kind {
             Kind::Seq(items) => items.as_slice(),
             _ => std::slice::from_ref(v),
         };
-        items.iter().map(|i| i.expect_str(&format!("`{key}` item"))).collect()
+        items
+            .iter()
+            .map(|i| i.expect_str(&format!("`{key}` item")))
+            .collect()
     }
 
     /// A file path, relative to the graph file's folder.
@@ -252,11 +307,14 @@ impl<'a> Params<'a> {
     /// constant, T > 0 discrete, or `[T, offset]` with 0 ≤ offset < T.
     pub fn sample_time(&mut self, default: SampleTime) -> Result<SampleTime, Diagnostic> {
         let key = "sample_time";
-        let Some(v) = self.raw(key) else { return Ok(default) };
+        let Some(v) = self.raw(key) else {
+            return Ok(default);
+        };
         let (period, offset) = match &v.kind {
-            Kind::Seq(items) if items.len() == 2 => {
-                (self.number_value(key, &items[0])?, self.number_value(key, &items[1])?)
-            }
+            Kind::Seq(items) if items.len() == 2 => (
+                self.number_value(key, &items[0])?,
+                self.number_value(key, &items[1])?,
+            ),
             Kind::Str(s) if s == "inf" => return Ok(SampleTime::Constant),
             Kind::Seq(_) => return Err(self.error(key, "expected a period or [period, offset]")),
             _ => (self.number_value(key, v)?, 0.0),
@@ -269,7 +327,9 @@ impl<'a> Params<'a> {
             p if p > 0.0 && p.is_finite() && (0.0..p).contains(&offset) => {
                 Ok(SampleTime::Discrete { period: p, offset })
             }
-            _ => Err(self.error(key, format!("bad sample time [{period}, {offset}]")).with_hint(hint)),
+            _ => Err(self
+                .error(key, format!("bad sample time [{period}, {offset}]"))
+                .with_hint(hint)),
         }
     }
 
@@ -282,7 +342,10 @@ impl<'a> Params<'a> {
         match self.sample_time(SampleTime::Inherited)? {
             st @ SampleTime::Discrete { .. } => Ok(st),
             other => Err(self
-                .error("sample_time", format!("this block is discrete: needs a period T > 0, got {other}"))
+                .error(
+                    "sample_time",
+                    format!("this block is discrete: needs a period T > 0, got {other}"),
+                )
                 .with_hint("write `sample_time: T` or `sample_time: [T, offset]`")),
         }
     }
@@ -292,7 +355,10 @@ impl<'a> Params<'a> {
         let known: Vec<&str> = self.docs.iter().map(|d| d.name).collect();
         for ((key, _), used) in self.entries.iter().zip(&self.used) {
             if !used {
-                let message = format!("block `{}` ({}): unknown parameter `{}`", self.block, self.type_name, key.name);
+                let message = format!(
+                    "block `{}` ({}): unknown parameter `{}`",
+                    self.block, self.type_name, key.name
+                );
                 return Err(Diagnostic::at(&key.pos, message)
                     .suggest(&key.name, known.iter().copied())
                     .or_hint(format!("{} takes: {}", self.type_name, known.join(", "))));
@@ -332,6 +398,10 @@ impl Scope for VarScope<'_> {
         }
     }
     fn names(&self) -> Vec<String> {
-        self.vars.iter().map(|v| v.to_string()).chain(Constants(self.params).names()).collect()
+        self.vars
+            .iter()
+            .map(|v| v.to_string())
+            .chain(Constants(self.params).names())
+            .collect()
     }
 }

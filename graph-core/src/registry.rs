@@ -31,7 +31,10 @@ pub struct Built {
 
 impl Built {
     pub fn new(block: impl Block + 'static, iface: Interface) -> Self {
-        Built { block: Box::new(block), iface }
+        Built {
+            block: Box::new(block),
+            iface,
+        }
     }
 }
 

@@ -18,14 +18,27 @@ use std::fmt;
 #[derive(Clone, Debug, PartialEq)]
 pub enum SimError {
     /// A signal or state became NaN or infinite.
-    NonFinite { t: f64, block: String, what: String, value: f64 },
-    Solver { t: f64, error: SolverError },
+    NonFinite {
+        t: f64,
+        block: String,
+        what: String,
+        value: f64,
+    },
+    Solver {
+        t: f64,
+        error: SolverError,
+    },
 }
 
 impl fmt::Display for SimError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            SimError::NonFinite { t, block, what, value } => {
+            SimError::NonFinite {
+                t,
+                block,
+                what,
+                value,
+            } => {
                 write!(f, "t = {t}: block `{block}`: {what} is {value}")
             }
             SimError::Solver { t, error } => write!(f, "t = {t}: solver: {error}"),
@@ -86,12 +99,33 @@ impl Simulator {
     pub fn new(model: Model, stop: Option<f64>) -> Self {
         let stop = stop.unwrap_or(model.sim.stop);
         let method = model.sim.method;
-        let grid_step = if method.is_adaptive() { 0.0 } else { method.max_step() };
-        let clocks: Vec<Clock> =
-            model.clocks.iter().map(|&(period, offset)| Clock { period, offset, tick: 0, hit: false }).collect();
-        let smallest = clocks.iter().map(|c| c.period).chain([stop, method.max_step()]).filter(|&p| p > 0.0).fold(f64::INFINITY, f64::min);
-        let continuous = (0..model.meta.len()).filter(|&i| model.meta[i].rate == Rate::Continuous).collect();
-        let stateful = (0..model.meta.len()).filter(|&i| !model.meta[i].states.is_empty()).collect();
+        let grid_step = if method.is_adaptive() {
+            0.0
+        } else {
+            method.max_step()
+        };
+        let clocks: Vec<Clock> = model
+            .clocks
+            .iter()
+            .map(|&(period, offset)| Clock {
+                period,
+                offset,
+                tick: 0,
+                hit: false,
+            })
+            .collect();
+        let smallest = clocks
+            .iter()
+            .map(|c| c.period)
+            .chain([stop, method.max_step()])
+            .filter(|&p| p > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        let continuous = (0..model.meta.len())
+            .filter(|&i| model.meta[i].rate == Rate::Continuous)
+            .collect();
+        let stateful = (0..model.meta.len())
+            .filter(|&i| !model.meta[i].states.is_empty())
+            .collect();
         let mut sim = Simulator {
             signals: vec![0.0; model.signal_len],
             x: vec![0.0; model.n_states],
@@ -155,7 +189,10 @@ impl Simulator {
     }
 
     pub fn stats(&self) -> RunStats {
-        RunStats { major_steps: self.major_steps, solver: self.integ.stats() }
+        RunStats {
+            major_steps: self.major_steps,
+            solver: self.integ.stats(),
+        }
     }
 
     /// Whether the run has reached its stop time.
@@ -188,14 +225,30 @@ impl Simulator {
                 Rate::Discrete(c) => self.clocks[c].hit,
             };
             if runs {
-                let mut io = io_for(meta, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
+                let mut io = io_for(
+                    meta,
+                    self.t,
+                    false,
+                    &self.x,
+                    &mut self.signals,
+                    &m.in_ports,
+                    &m.out_ports,
+                );
                 block.output(&mut io);
             }
         }
         self.first = false;
         if let Some(k) = self.signals.iter().position(|v| !v.is_finite()) {
-            let (meta, port) = self.model.signal_owner(k).map_or(("?".to_string(), "?"), |(m, p)| (m.name.clone(), p));
-            return Err(SimError::NonFinite { t: self.t, block: meta, what: format!("output `{port}`"), value: self.signals[k] });
+            let (meta, port) = self
+                .model
+                .signal_owner(k)
+                .map_or(("?".to_string(), "?"), |(m, p)| (m.name.clone(), p));
+            return Err(SimError::NonFinite {
+                t: self.t,
+                block: meta,
+                what: format!("output `{port}`"),
+                value: self.signals[k],
+            });
         }
         Ok(())
     }
@@ -212,7 +265,15 @@ impl Simulator {
                 Rate::Discrete(c) => self.clocks[c].hit,
             };
             if runs {
-                let mut io = io_for(meta, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
+                let mut io = io_for(
+                    meta,
+                    self.t,
+                    false,
+                    &self.x,
+                    &mut self.signals,
+                    &m.in_ports,
+                    &m.out_ports,
+                );
                 block.update(&mut io);
             }
         }
@@ -230,10 +291,16 @@ impl Simulator {
                 t_end: target,
             };
             let t = self.t;
-            self.integ.advance(&mut sys, t, target, &mut self.x).map_err(|error| SimError::Solver { t, error })?
+            self.integ
+                .advance(&mut sys, t, target, &mut self.x)
+                .map_err(|error| SimError::Solver { t, error })?
         };
         // Land exactly on the target when the solver reached it.
-        self.t = if (target - t_new).abs() <= self.tol { target } else { t_new };
+        self.t = if (target - t_new).abs() <= self.tol {
+            target
+        } else {
+            t_new
+        };
         if self.grid_step > 0.0 {
             while (self.grid_tick as f64) * self.grid_step <= self.t + self.tol {
                 self.grid_tick += 1;
@@ -245,13 +312,27 @@ impl Simulator {
             clamped |= self.model.blocks[i].clamp_states(&mut self.x[meta.states.clone()]);
         }
         let hit = self.mark_hits();
-        let event = self.model.blocks.iter().any(|b| (b.next_event(self.t - 2.0 * self.tol) - self.t).abs() <= self.tol);
+        let event = self
+            .model
+            .blocks
+            .iter()
+            .any(|b| (b.next_event(self.t - 2.0 * self.tol) - self.t).abs() <= self.tol);
         if hit || event || clamped {
             self.integ.invalidate();
         }
         if let Some(k) = self.x.iter().position(|v| !v.is_finite()) {
-            let owner = self.model.meta.iter().find(|m| m.states.contains(&k)).map_or("?", |m| m.name.as_str());
-            return Err(SimError::NonFinite { t: self.t, block: owner.to_string(), what: format!("state {}", k), value: self.x[k] });
+            let owner = self
+                .model
+                .meta
+                .iter()
+                .find(|m| m.states.contains(&k))
+                .map_or("?", |m| m.name.as_str());
+            return Err(SimError::NonFinite {
+                t: self.t,
+                block: owner.to_string(),
+                what: format!("state {}", k),
+                value: self.x[k],
+            });
         }
         self.major_steps += 1;
         Ok(())
@@ -272,7 +353,11 @@ impl Simulator {
         for b in &self.model.blocks {
             event = event.min(b.next_event(self.t));
         }
-        if event <= next + self.tol { event } else { next }
+        if event <= next + self.tol {
+            event
+        } else {
+            next
+        }
     }
 
     /// Runs to the stop time, handing the signals to `sink` at every major

@@ -6,7 +6,15 @@ use crate::diag::{Diagnostic, Pos};
 use crate::yaml::{self, Key, Kind, Yaml};
 use std::sync::Arc;
 
-const TOP_KEYS: [&str; 7] = ["name", "description", "parameters", "simulation", "blocks", "wires", "record"];
+const TOP_KEYS: [&str; 7] = [
+    "name",
+    "description",
+    "parameters",
+    "simulation",
+    "blocks",
+    "wires",
+    "record",
+];
 
 /// One graph file.
 #[derive(Clone, Debug)]
@@ -71,28 +79,45 @@ impl GraphFile {
         let root = yaml::parse(text, &file)?;
         let top = match &root.kind {
             Kind::Map(m) => m.as_slice(),
-            _ => return Err(Diagnostic::at(&root.pos, "a graph file must be a mapping with `blocks:`, `wires:`, …")),
+            _ => {
+                return Err(Diagnostic::at(
+                    &root.pos,
+                    "a graph file must be a mapping with `blocks:`, `wires:`, …",
+                ));
+            }
         };
         for (key, _) in top {
             if !TOP_KEYS.contains(&key.name.as_str()) {
-                return Err(Diagnostic::at(&key.pos, format!("unknown top-level key `{}`", key.name))
-                    .suggest(&key.name, TOP_KEYS)
-                    .or_hint(format!("top-level keys: {}", TOP_KEYS.join(", "))));
+                return Err(Diagnostic::at(
+                    &key.pos,
+                    format!("unknown top-level key `{}`", key.name),
+                )
+                .suggest(&key.name, TOP_KEYS)
+                .or_hint(format!("top-level keys: {}", TOP_KEYS.join(", "))));
             }
         }
         let text_of = |k: &str| -> Result<Option<String>, Diagnostic> {
-            yaml::lookup(top, k).map(|v| v.expect_str(&format!("`{k}`")).map(str::to_string)).transpose()
+            yaml::lookup(top, k)
+                .map(|v| v.expect_str(&format!("`{k}`")).map(str::to_string))
+                .transpose()
         };
         let parameters = match yaml::lookup(top, "parameters") {
             Some(p) => p.expect_map("`parameters`")?.to_vec(),
             None => Vec::new(),
         };
         let blocks = match yaml::lookup(top, "blocks") {
-            Some(b) => b.expect_map("`blocks`")?.iter().map(parse_block).collect::<Result<_, _>>()?,
+            Some(b) => b
+                .expect_map("`blocks`")?
+                .iter()
+                .map(parse_block)
+                .collect::<Result<_, _>>()?,
             None => Vec::new(),
         };
         let wires = match yaml::lookup(top, "wires") {
-            Some(w) => seq(w, "`wires`")?.iter().map(parse_wire).collect::<Result<_, _>>()?,
+            Some(w) => seq(w, "`wires`")?
+                .iter()
+                .map(parse_wire)
+                .collect::<Result<_, _>>()?,
             None => Vec::new(),
         };
         let (record, record_every) = match yaml::lookup(top, "record") {
@@ -117,35 +142,56 @@ fn seq<'a>(v: &'a Yaml, what: &str) -> Result<&'a [Yaml], Diagnostic> {
     match &v.kind {
         Kind::Seq(items) => Ok(items),
         Kind::Null => Ok(&[]),
-        _ => Err(Diagnostic::at(&v.pos, format!("{what} must be a list, found {}", v.describe()))),
+        _ => Err(Diagnostic::at(
+            &v.pos,
+            format!("{what} must be a list, found {}", v.describe()),
+        )),
     }
 }
 
 fn is_identifier(s: &str) -> bool {
     let mut chars = s.chars();
-    chars.next().is_some_and(|c| c.is_alphabetic() || c == '_') && chars.all(|c| c.is_alphanumeric() || c == '_')
+    chars.next().is_some_and(|c| c.is_alphabetic() || c == '_')
+        && chars.all(|c| c.is_alphanumeric() || c == '_')
 }
 
 fn parse_block((key, value): &(Key, Yaml)) -> Result<BlockSpec, Diagnostic> {
     if !is_identifier(&key.name) {
-        return Err(Diagnostic::at(&key.pos, format!("`{}` is not a valid block name", key.name))
-            .with_hint("block names are letters, digits and `_`, starting with a letter or `_`"));
+        return Err(Diagnostic::at(
+            &key.pos,
+            format!("`{}` is not a valid block name", key.name),
+        )
+        .with_hint("block names are letters, digits and `_`, starting with a letter or `_`"));
     }
     let entries = match &value.kind {
         Kind::Map(m) => m,
         _ => {
             return Err(Diagnostic::at(
                 &value.pos,
-                format!("block `{}` must be a mapping like `{{ type: gain, k: 2 }}`, found {}", key.name, value.describe()),
+                format!(
+                    "block `{}` must be a mapping like `{{ type: gain, k: 2 }}`, found {}",
+                    key.name,
+                    value.describe()
+                ),
             ));
         }
     };
     let Some(ty) = yaml::lookup(entries, "type") else {
-        return Err(Diagnostic::at(&key.pos, format!("block `{}` has no `type`", key.name))
-            .with_hint("`ctlgraph blocks` lists the block types"));
+        return Err(
+            Diagnostic::at(&key.pos, format!("block `{}` has no `type`", key.name))
+                .with_hint("`ctlgraph blocks` lists the block types"),
+        );
     };
-    let type_name = ty.expect_str(&format!("block `{}`: `type`", key.name))?.to_string();
-    Ok(BlockSpec { name: key.name.clone(), pos: key.pos.clone(), type_name, type_pos: ty.pos.clone(), params: entries.clone() })
+    let type_name = ty
+        .expect_str(&format!("block `{}`: `type`", key.name))?
+        .to_string();
+    Ok(BlockSpec {
+        name: key.name.clone(),
+        pos: key.pos.clone(),
+        type_name,
+        type_pos: ty.pos.clone(),
+        params: entries.clone(),
+    })
 }
 
 /// Parses `block` or `block.port` (block may be a `sub/inner` path)
@@ -158,15 +204,25 @@ pub fn parse_endpoint(text: &str, pos: Pos) -> Result<Endpoint, Diagnostic> {
     };
     let ok = block.split('/').all(is_identifier) && port.is_none_or(is_identifier);
     if !ok {
-        return Err(Diagnostic::at(&pos, format!("`{text}` is not a signal: expected `block` or `block.port`")));
+        return Err(Diagnostic::at(
+            &pos,
+            format!("`{text}` is not a signal: expected `block` or `block.port`"),
+        ));
     }
-    Ok(Endpoint { block: block.to_string(), port: port.map(str::to_string), pos })
+    Ok(Endpoint {
+        block: block.to_string(),
+        port: port.map(str::to_string),
+        pos,
+    })
 }
 
 fn parse_wire(v: &Yaml) -> Result<WireSpec, Diagnostic> {
     let text = v.expect_str("a wire")?;
     let Some((src, dsts)) = text.split_once("->") else {
-        return Err(Diagnostic::at(&v.pos, format!("`{text}` is not a wire: expected `source.port -> dest.port`")));
+        return Err(Diagnostic::at(
+            &v.pos,
+            format!("`{text}` is not a wire: expected `source.port -> dest.port`"),
+        ));
     };
     // Positions of the parts within the line, for precise messages.
     let offset_of = |part: &str| {
@@ -189,14 +245,24 @@ fn parse_record(v: &Yaml) -> Result<Records, Diagnostic> {
         Kind::Map(m) => {
             for (k, _) in m {
                 if k.name != "signals" && k.name != "every" {
-                    return Err(Diagnostic::at(&k.pos, format!("unknown key `{}` in `record`", k.name))
-                        .suggest(&k.name, ["signals", "every"]));
+                    return Err(Diagnostic::at(
+                        &k.pos,
+                        format!("unknown key `{}` in `record`", k.name),
+                    )
+                    .suggest(&k.name, ["signals", "every"]));
                 }
             }
             let every = match yaml::lookup(m, "every") {
                 Some(e) => match e.kind {
-                    Kind::Num(n) if n >= 1.0 && n.fract() == 0.0 => Some((n as usize, e.pos.clone())),
-                    _ => return Err(Diagnostic::at(&e.pos, "`every` must be a positive whole number of steps")),
+                    Kind::Num(n) if n >= 1.0 && n.fract() == 0.0 => {
+                        Some((n as usize, e.pos.clone()))
+                    }
+                    _ => {
+                        return Err(Diagnostic::at(
+                            &e.pos,
+                            "`every` must be a positive whole number of steps",
+                        ));
+                    }
                 },
                 None => None,
             };
@@ -210,14 +276,23 @@ fn parse_record(v: &Yaml) -> Result<Records, Diagnostic> {
     let mut out = Vec::new();
     for item in list {
         match &item.kind {
-            Kind::Str(s) => out.push(RecordSpec { name: s.trim().to_string(), signal: parse_endpoint(s, item.pos.clone())? }),
+            Kind::Str(s) => out.push(RecordSpec {
+                name: s.trim().to_string(),
+                signal: parse_endpoint(s, item.pos.clone())?,
+            }),
             Kind::Map(m) if m.len() == 1 => {
                 let (k, sig) = &m[0];
                 let s = sig.expect_str("a recorded signal")?;
-                out.push(RecordSpec { name: k.name.clone(), signal: parse_endpoint(s, sig.pos.clone())? });
+                out.push(RecordSpec {
+                    name: k.name.clone(),
+                    signal: parse_endpoint(s, sig.pos.clone())?,
+                });
             }
             _ => {
-                return Err(Diagnostic::at(&item.pos, "a record entry is `block.port` or `name: block.port`"));
+                return Err(Diagnostic::at(
+                    &item.pos,
+                    "a record entry is `block.port` or `name: block.port`",
+                ));
             }
         }
     }
@@ -234,8 +309,14 @@ mod tests {
         let g = GraphFile::parse(text, "g.yaml".into()).unwrap();
         let w = &g.wires[0];
         assert_eq!(w.src.to_string(), "a.y");
-        assert_eq!((w.dsts[0].to_string(), w.dsts[0].pos.col), ("b.u1".to_string(), 12));
-        assert_eq!((w.dsts[1].to_string(), w.dsts[1].pos.col), ("c".to_string(), 18));
+        assert_eq!(
+            (w.dsts[0].to_string(), w.dsts[0].pos.col),
+            ("b.u1".to_string(), 12)
+        );
+        assert_eq!(
+            (w.dsts[1].to_string(), w.dsts[1].pos.col),
+            ("c".to_string(), 18)
+        );
         assert_eq!(g.record[1].name, "y");
         assert_eq!(g.record_every.map(|e| e.0), Some(2));
     }
@@ -246,7 +327,10 @@ mod tests {
         assert_eq!(e.message, "unknown top-level key `blocs`");
         assert_eq!(e.hint.as_deref(), Some("did you mean `blocks`?"));
         let e = GraphFile::parse("blocks:\n  a: {k: 1}\n", "g.yaml".into()).unwrap_err();
-        assert_eq!((e.pos.unwrap().line, e.message.as_str()), (2, "block `a` has no `type`"));
+        assert_eq!(
+            (e.pos.unwrap().line, e.message.as_str()),
+            (2, "block `a` has no `type`")
+        );
         let e = GraphFile::parse("wires:\n  - a => b\n", "g.yaml".into()).unwrap_err();
         assert!(e.message.contains("is not a wire"), "{e}");
     }

@@ -4,6 +4,9 @@
 //! simulator in `ctlgraph-core` implements [`OdeSystem`] and drives an
 //! [`Integrator`] from one major step to the next.
 
+// Index loops mirror the textbook formulas of the numerical methods.
+#![allow(clippy::needless_range_loop)]
+
 pub mod lti;
 pub mod ode;
 pub mod poly;

@@ -23,7 +23,10 @@ pub struct StateSpace {
 #[derive(Clone, Debug, PartialEq)]
 pub enum LtiError {
     /// The numerator's degree exceeds the denominator's.
-    Improper { num_degree: usize, den_degree: usize },
+    Improper {
+        num_degree: usize,
+        den_degree: usize,
+    },
     /// The denominator is the zero polynomial.
     ZeroDenominator,
     /// Matrix shapes do not fit together.
@@ -35,7 +38,10 @@ pub enum LtiError {
 impl fmt::Display for LtiError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            LtiError::Improper { num_degree, den_degree } => write!(
+            LtiError::Improper {
+                num_degree,
+                den_degree,
+            } => write!(
                 f,
                 "improper transfer function: numerator degree {num_degree} exceeds denominator degree {den_degree}"
             ),
@@ -59,27 +65,47 @@ impl StateSpace {
         let rect = |m: &[Vec<f64>], name: &str| -> Result<usize, LtiError> {
             let cols = m.first().map_or(0, Vec::len);
             if m.iter().any(|r| r.len() != cols) {
-                return Err(LtiError::Shape(format!("{name}: rows have different lengths")));
+                return Err(LtiError::Shape(format!(
+                    "{name}: rows have different lengths"
+                )));
             }
             Ok(cols)
         };
         if rect(&a, "A")? != n {
-            return Err(LtiError::Shape(format!("A must be square, got {n} rows of {}", rect(&a, "A")?)));
+            return Err(LtiError::Shape(format!(
+                "A must be square, got {n} rows of {}",
+                rect(&a, "A")?
+            )));
         }
         let m = rect(&b, "B")?;
         if b.len() != n {
-            return Err(LtiError::Shape(format!("B must have {n} rows (one per state), got {}", b.len())));
+            return Err(LtiError::Shape(format!(
+                "B must have {n} rows (one per state), got {}",
+                b.len()
+            )));
         }
         let p = c.len();
         if rect(&c, "C")? != n && p > 0 {
-            return Err(LtiError::Shape(format!("C must have {n} columns (one per state)")));
+            return Err(LtiError::Shape(format!(
+                "C must have {n} columns (one per state)"
+            )));
         }
         let m = if n == 0 { rect(&d, "D")? } else { m };
         if d.len() != p || rect(&d, "D")? != m {
-            return Err(LtiError::Shape(format!("D must be {p}×{m} (outputs × inputs)")));
+            return Err(LtiError::Shape(format!(
+                "D must be {p}×{m} (outputs × inputs)"
+            )));
         }
         let flat = |m: Vec<Vec<f64>>| m.into_iter().flatten().collect::<Vec<_>>();
-        Ok(StateSpace { n, m, p, a: flat(a), b: flat(b), c: flat(c), d: flat(d) })
+        Ok(StateSpace {
+            n,
+            m,
+            p,
+            a: flat(a),
+            b: flat(b),
+            c: flat(c),
+            d: flat(d),
+        })
     }
 
     /// Whether any output depends directly on the input (D ≠ 0).
@@ -131,7 +157,10 @@ pub fn tf2ss(num: &[f64], den: &[f64]) -> Result<StateSpace, LtiError> {
     let num = poly::trim_leading_zeros(num);
     let (nd, nn) = (den.len() - 1, num.len().saturating_sub(1));
     if num.len() > den.len() {
-        return Err(LtiError::Improper { num_degree: nn, den_degree: nd });
+        return Err(LtiError::Improper {
+            num_degree: nn,
+            den_degree: nd,
+        });
     }
     let lead = den[0];
     let a_coef: Vec<f64> = den[1..].iter().map(|v| v / lead).collect();
@@ -153,7 +182,15 @@ pub fn tf2ss(num: &[f64], den: &[f64]) -> Result<StateSpace, LtiError> {
         b[0] = 1.0;
     }
     let c: Vec<f64> = (0..n).map(|i| b_coef[i + 1] - d0 * a_coef[i]).collect();
-    Ok(StateSpace { n, m: 1, p: 1, a, b, c, d: vec![d0] })
+    Ok(StateSpace {
+        n,
+        m: 1,
+        p: 1,
+        a,
+        b,
+        c,
+        d: vec![d0],
+    })
 }
 
 /// Numerator and denominator of `k · Π(s − zᵢ) / Π(s − pᵢ)`.
@@ -162,7 +199,11 @@ pub fn zpk2tf(
     poles: &[Complex<f64>],
     gain: f64,
 ) -> Result<(Vec<f64>, Vec<f64>), LtiError> {
-    let num: Vec<f64> = poly::from_roots(zeros).map_err(LtiError::Roots)?.iter().map(|c| c * gain).collect();
+    let num: Vec<f64> = poly::from_roots(zeros)
+        .map_err(LtiError::Roots)?
+        .iter()
+        .map(|c| c * gain)
+        .collect();
     let den = poly::from_roots(poles).map_err(LtiError::Roots)?;
     Ok((num, den))
 }
@@ -203,7 +244,10 @@ mod tests {
             let ss = tf2ss(&num, &den).unwrap();
             for w in [0.0, 0.3, 7.0, 150.0] {
                 let (a, b) = (freq_response(&ss, w), tf_response(&num, &den, w));
-                assert!((a - b).norm() <= 1e-10 * b.norm().max(1.0), "w={w}: {a} vs {b}");
+                assert!(
+                    (a - b).norm() <= 1e-10 * b.norm().max(1.0),
+                    "w={w}: {a} vs {b}"
+                );
             }
         }
     }
@@ -212,7 +256,10 @@ mod tests {
     fn improper_and_zero_denominators_are_rejected() {
         assert_eq!(
             tf2ss(&[1.0, 0.0, 0.0], &[1.0, 1.0]),
-            Err(LtiError::Improper { num_degree: 2, den_degree: 1 })
+            Err(LtiError::Improper {
+                num_degree: 2,
+                den_degree: 1
+            })
         );
         assert_eq!(tf2ss(&[1.0], &[0.0, 0.0]), Err(LtiError::ZeroDenominator));
     }
@@ -232,7 +279,12 @@ mod tests {
             vec![vec![0.0]],
         );
         assert!(ok.is_ok());
-        let bad = StateSpace::new(vec![vec![0.0, 1.0]], vec![vec![0.0]], vec![vec![1.0]], vec![vec![0.0]]);
+        let bad = StateSpace::new(
+            vec![vec![0.0, 1.0]],
+            vec![vec![0.0]],
+            vec![vec![1.0]],
+            vec![vec![0.0]],
+        );
         assert!(matches!(bad, Err(LtiError::Shape(_))));
     }
 }

@@ -55,7 +55,12 @@ fn dormand_prince_is_fifth_order_at_fixed_step() {
 
 #[test]
 fn dormand_prince_meets_tolerance_and_lands_exactly() {
-    let method = Method::DormandPrince { rtol: 1e-8, atol: 1e-10, max_step: 1.0, initial_step: None };
+    let method = Method::DormandPrince {
+        rtol: 1e-8,
+        atol: 1e-10,
+        max_step: 1.0,
+        initial_step: None,
+    };
     let mut integ = Integrator::new(method, 2);
     let mut x = [1.0, 0.0];
     let mut t = 0.0;
@@ -71,7 +76,10 @@ fn dormand_prince_meets_tolerance_and_lands_exactly() {
     let err = (x[0] - 3f64.cos()).abs().max((x[1] + 3f64.sin()).abs());
     assert!(err < 1e-7, "error {err}");
     let stats = integ.stats();
-    assert!(stats.steps >= 10 && stats.evaluations >= 6 * stats.steps, "{stats:?}");
+    assert!(
+        stats.steps >= 10 && stats.evaluations >= 6 * stats.steps,
+        "{stats:?}"
+    );
 }
 
 #[test]
@@ -83,7 +91,12 @@ fn dormand_prince_rejects_steps_across_a_kink() {
             dx[0] = if t < 1.0 { 1.0 } else { -50.0 * x[0] };
         }
     }
-    let method = Method::DormandPrince { rtol: 1e-6, atol: 1e-9, max_step: 0.5, initial_step: None };
+    let method = Method::DormandPrince {
+        rtol: 1e-6,
+        atol: 1e-9,
+        max_step: 0.5,
+        initial_step: None,
+    };
     let mut integ = Integrator::new(method, 1);
     let (mut t, mut x) = (0.0, [0.0]);
     while t < 2.0 {
@@ -110,7 +123,12 @@ fn blow_up_is_reported_not_looped_on() {
             dx[0] = x[0] * x[0];
         }
     }
-    let method = Method::DormandPrince { rtol: 1e-6, atol: 1e-9, max_step: 1.0, initial_step: None };
+    let method = Method::DormandPrince {
+        rtol: 1e-6,
+        atol: 1e-9,
+        max_step: 1.0,
+        initial_step: None,
+    };
     let mut integ = Integrator::new(method, 1);
     let (mut t, mut x) = (0.0, [1.0]);
     let mut result = Ok(0.0);
@@ -120,6 +138,9 @@ fn blow_up_is_reported_not_looped_on() {
             t = tn;
         }
     }
-    assert!(result.is_err(), "x = 1/(1-t) must blow up near t = 1, got t = {t}");
+    assert!(
+        result.is_err(),
+        "x = 1/(1-t) must blow up near t = 1, got t = {t}"
+    );
     assert!(t < 1.001, "t = {t}, x = {:?}, {result:?}", x);
 }

@@ -1,0 +1,362 @@
+//! Continuous dynamics: integrator, filtered derivative, and linear systems
+//! given as transfer function, zeros-poles-gain or state space. States are
+//! integrated by the simulation's solver.
+
+use crate::param;
+use ctlgraph_core::registry::{BlockType, Built, PortDoc};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_solver::lti::LtiError;
+use ctlgraph_solver::{StateSpace, tf2ss, zpk2tf};
+use nalgebra::Complex;
+
+const SISO_IN: &[PortDoc] = &[PortDoc {
+    name: "u",
+    doc: "scalar",
+}];
+const SISO_OUT: &[PortDoc] = &[PortDoc {
+    name: "y",
+    doc: "scalar",
+}];
+
+pub const TYPES: &[BlockType] = &[
+    BlockType {
+        name: "integrator",
+        category: "dynamics",
+        summary: "y = ∫u dt, with initial condition and optional limits.",
+        doc: "x' = u, y = x, elementwise. With limits, x stays in [lower, upper]: the derivative is \
+              zeroed while x sits on a limit and u pushes outward, and x is projected back after each \
+              step (Simulink's limited integrator). No direct feedthrough: it closes loops legally.",
+        inputs: &[PortDoc {
+            name: "u",
+            doc: "any width",
+        }],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "same width as u",
+        }],
+        params: &[
+            param("initial", Some("0"), "x(0): a number or one per element"),
+            param("lower", Some("-inf"), "lower limit of x"),
+            param("upper", Some("inf"), "upper limit of x"),
+        ],
+        build: build_integrator,
+    },
+    BlockType {
+        name: "derivative",
+        category: "dynamics",
+        summary: "Filtered derivative y = s/(τs + 1)·u.",
+        doc: "A realisable derivative: y = (u − x)/τ with x' = (u − x)/τ, i.e. Y(s) = s/(τs + 1)·U(s). \
+              It differentiates frequencies below 1/τ rad/s. x(0) = `initial_input`, so a signal that \
+              starts at that value gives no kick at t = 0.",
+        inputs: &[PortDoc {
+            name: "u",
+            doc: "any width",
+        }],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "same width as u",
+        }],
+        params: &[
+            param("tau", Some("1e-3"), "filter time constant τ [s], > 0"),
+            param("initial_input", Some("0"), "the input assumed before t = 0"),
+        ],
+        build: build_derivative,
+    },
+    BlockType {
+        name: "transfer_function",
+        category: "dynamics",
+        summary: "Continuous transfer function num(s)/den(s).",
+        doc: "Coefficients in descending powers of s (MATLAB's tf): num [1.639e4], den [1, 154.8, \
+              2.242e4] is 1.639e4/(s² + 154.8 s + 2.242e4). Must be proper (deg num <= deg den). \
+              Realised in controllable canonical form (MATLAB's tf2ss), zero initial state. Direct \
+              feedthrough only when deg num = deg den.",
+        inputs: SISO_IN,
+        outputs: SISO_OUT,
+        params: &[
+            param(
+                "num",
+                None,
+                "numerator coefficients, descending powers of s",
+            ),
+            param(
+                "den",
+                None,
+                "denominator coefficients, descending powers of s",
+            ),
+        ],
+        build: build_tf,
+    },
+    BlockType {
+        name: "zpk",
+        category: "dynamics",
+        summary: "Continuous transfer function from zeros, poles and gain.",
+        doc: "G(s) = gain·Π(s − zᵢ)/Π(s − pᵢ). A complex root is written [re, im] and stands for the \
+              conjugate pair re ± j·im. Realised like transfer_function.",
+        inputs: SISO_IN,
+        outputs: SISO_OUT,
+        params: &[
+            param(
+                "zeros",
+                Some("[]"),
+                "list of zeros: numbers or [re, im] pairs",
+            ),
+            param("poles", None, "list of poles: numbers or [re, im] pairs"),
+            param("gain", Some("1"), "k"),
+        ],
+        build: build_zpk,
+    },
+    BlockType {
+        name: "state_space",
+        category: "dynamics",
+        summary: "x' = A x + B u, y = C x + D u.",
+        doc: "Matrices as lists of rows. Input width = columns of B, output width = rows of C. D \
+              defaults to zero (no direct feedthrough).",
+        inputs: &[PortDoc {
+            name: "u",
+            doc: "width = columns of B",
+        }],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "width = rows of C",
+        }],
+        params: &[
+            param("A", None, "n×n"),
+            param("B", None, "n×m"),
+            param("C", None, "p×n"),
+            param("D", Some("0"), "p×m"),
+            param("initial", Some("0"), "x(0): a number or n numbers"),
+        ],
+        build: build_state_space,
+    },
+];
+
+/// Broadcasts a scalar initial condition, or checks a vector's length.
+pub(crate) fn initial_vector(v: &[f64], n: usize) -> Result<Vec<f64>, String> {
+    match v.len() {
+        1 => Ok(vec![v[0]; n]),
+        len if len == n => Ok(v.to_vec()),
+        len => Err(format!(
+            "`initial` has {len} values but the block has {n} states"
+        )),
+    }
+}
+
+/// Elementwise integrator with optional limits.
+pub struct Integrator {
+    initial: Vec<f64>,
+    x0: Vec<f64>,
+    lower: f64,
+    upper: f64,
+}
+
+impl Block for Integrator {
+    fn set_width(&mut self, width: usize) -> Result<(), String> {
+        self.x0 = initial_vector(&self.initial, width)?;
+        Ok(())
+    }
+    fn num_states(&self) -> usize {
+        self.x0.len()
+    }
+    fn initialize(&mut self, x0: &mut [f64]) {
+        x0.copy_from_slice(&self.x0);
+    }
+    fn output(&mut self, io: &mut Io) {
+        let x = io.x;
+        io.output(0).copy_from_slice(x);
+    }
+    fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
+        for (k, d) in dx.iter_mut().enumerate() {
+            let (x, u) = (io.x[k], io.u_at(0, k));
+            let blocked = (x >= self.upper && u > 0.0) || (x <= self.lower && u < 0.0);
+            *d = if blocked { 0.0 } else { u };
+        }
+    }
+    fn clamp_states(&self, x: &mut [f64]) -> bool {
+        let mut moved = false;
+        for v in x {
+            let c = v.clamp(self.lower, self.upper);
+            moved |= c != *v;
+            *v = c;
+        }
+        moved
+    }
+}
+
+fn build_integrator(p: &mut Params) -> Result<Built, Diagnostic> {
+    let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
+    let (lower, upper) =
+        crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
+    if let Some(v) = initial.iter().find(|v| !(lower..=upper).contains(*v)) {
+        return Err(p.error("initial", format!("{v} is outside [{lower}, {upper}]")));
+    }
+    let iface = Interface::new(SampleTime::Continuous)
+        .input("u", Width::Common, false)
+        .output("y", Width::Common);
+    Ok(Built::new(
+        Integrator {
+            initial,
+            x0: Vec::new(),
+            lower,
+            upper,
+        },
+        iface,
+    ))
+}
+
+/// s/(τs + 1), elementwise.
+struct Derivative {
+    tau: f64,
+    initial_input: f64,
+    width: usize,
+}
+
+impl Block for Derivative {
+    fn set_width(&mut self, width: usize) -> Result<(), String> {
+        self.width = width;
+        Ok(())
+    }
+    fn num_states(&self) -> usize {
+        self.width
+    }
+    fn initialize(&mut self, x0: &mut [f64]) {
+        x0.iter_mut().for_each(|x| *x = self.initial_input);
+    }
+    fn output(&mut self, io: &mut Io) {
+        for k in 0..self.width {
+            let v = (io.u_at(0, k) - io.x[k]) / self.tau;
+            io.set_at(0, k, v);
+        }
+    }
+    fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
+        for (k, d) in dx.iter_mut().enumerate() {
+            *d = (io.u_at(0, k) - io.x[k]) / self.tau;
+        }
+    }
+}
+
+fn build_derivative(p: &mut Params) -> Result<Built, Diagnostic> {
+    let tau = p.number_where(
+        "tau",
+        Some(1e-3),
+        |v| v > 0.0 && v.is_finite(),
+        "a positive time constant",
+    )?;
+    let initial_input = p.number_or("initial_input", 0.0)?;
+    let iface = Interface::new(SampleTime::Continuous)
+        .input("u", Width::Common, true)
+        .output("y", Width::Common);
+    Ok(Built::new(
+        Derivative {
+            tau,
+            initial_input,
+            width: 1,
+        },
+        iface,
+    ))
+}
+
+/// A continuous LTI system; `y` is scratch so output needs no aliasing.
+pub struct Lti {
+    ss: StateSpace,
+    x0: Vec<f64>,
+    y: Vec<f64>,
+    feedthrough: bool,
+}
+
+impl Lti {
+    pub fn new(ss: StateSpace, x0: Vec<f64>) -> Self {
+        let feedthrough = ss.has_feedthrough();
+        Lti {
+            y: vec![0.0; ss.p],
+            x0,
+            ss,
+            feedthrough,
+        }
+    }
+
+    /// The block with its interface: input/output widths from the matrices.
+    pub fn built(self) -> Built {
+        let iface = Interface::new(SampleTime::Continuous)
+            .input("u", Width::Fixed(self.ss.m), self.feedthrough)
+            .output("y", Width::Fixed(self.ss.p));
+        Built::new(self, iface)
+    }
+}
+
+impl Block for Lti {
+    fn num_states(&self) -> usize {
+        self.ss.n
+    }
+    fn initialize(&mut self, x0: &mut [f64]) {
+        x0.copy_from_slice(&self.x0);
+    }
+    fn output(&mut self, io: &mut Io) {
+        if self.feedthrough {
+            self.ss.output(io.x, io.input(0), &mut self.y);
+        } else {
+            self.ss.output_state_only(io.x, &mut self.y);
+        }
+        io.output(0).copy_from_slice(&self.y);
+    }
+    fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
+        self.ss.derivative(io.x, io.input(0), dx);
+    }
+}
+
+/// Maps realisation errors onto the parameter they concern.
+pub(crate) fn lti_error(p: &Params, e: LtiError) -> Diagnostic {
+    let key = match e {
+        LtiError::Improper { .. } => "num",
+        LtiError::ZeroDenominator => "den",
+        _ => "poles",
+    };
+    let d = p.error(key, &e);
+    match e {
+        LtiError::Improper { .. } => {
+            d.with_hint("a physical system needs at least as many poles as zeros")
+        }
+        _ => d,
+    }
+}
+
+fn build_tf(p: &mut Params) -> Result<Built, Diagnostic> {
+    let (num, den) = (p.vector("num")?, p.vector("den")?);
+    let ss = tf2ss(&num, &den).map_err(|e| lti_error(p, e))?;
+    let n = ss.n;
+    Ok(Lti::new(ss, vec![0.0; n]).built())
+}
+
+fn build_zpk(p: &mut Params) -> Result<Built, Diagnostic> {
+    let to_c = |v: Vec<(f64, f64)>| {
+        v.into_iter()
+            .map(|(re, im)| Complex::new(re, im))
+            .collect::<Vec<_>>()
+    };
+    let zeros = to_c(p.roots("zeros")?);
+    if !p.has("poles") {
+        return Err(p.block_error("missing parameter `poles`"));
+    }
+    let poles = to_c(p.roots("poles")?);
+    let gain = p.number_or("gain", 1.0)?;
+    let (num, den) = zpk2tf(&zeros, &poles, gain).map_err(|e| lti_error(p, e))?;
+    let ss = tf2ss(&num, &den).map_err(|e| match e {
+        LtiError::Improper { .. } => p.error("zeros", format!("{e}: more zeros than poles")),
+        other => lti_error(p, other),
+    })?;
+    let n = ss.n;
+    Ok(Lti::new(ss, vec![0.0; n]).built())
+}
+
+fn build_state_space(p: &mut Params) -> Result<Built, Diagnostic> {
+    let (a, b, c) = (p.matrix("A")?, p.matrix("B")?, p.matrix("C")?);
+    let d = if p.has("D") {
+        p.matrix("D")?
+    } else {
+        let m = b.first().map_or(0, Vec::len);
+        vec![vec![0.0; m]; c.len()]
+    };
+    let ss = StateSpace::new(a, b, c, d).map_err(|e| p.error("A", e))?;
+    let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
+    let x0 = initial_vector(&initial, ss.n).map_err(|m| p.error("initial", m))?;
+    Ok(Lti::new(ss, x0).built())
+}

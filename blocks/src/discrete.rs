@@ -1,0 +1,172 @@
+//! Discrete-time dynamics: discrete transfer function, unit delay,
+//! zero-order hold. They run at their sample hits and hold in between.
+
+use crate::continuous::{initial_vector, lti_error};
+use crate::{SAMPLE_TIME_REQUIRED, param};
+use ctlgraph_core::registry::{BlockType, Built, PortDoc};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
+use ctlgraph_solver::{StateSpace, tf2ss};
+
+pub const TYPES: &[BlockType] = &[
+    BlockType {
+        name: "discrete_transfer_function",
+        category: "discrete",
+        summary: "Discrete transfer function num(z)/den(z) at a sample time.",
+        doc: "Coefficients in descending powers of z (Simulink's Discrete Transfer Fcn): num [1], den \
+              [1, -0.5] is 1/(z − 0.5), i.e. y(k) = 0.5·y(k−1) + u(k−1). Realised as x(k+1) = A x(k) + \
+              B u(k), y(k) = C x(k) + D u(k) in controllable canonical form; zero initial state. Must \
+              be proper; direct feedthrough only when deg num = deg den.",
+        inputs: &[PortDoc {
+            name: "u",
+            doc: "scalar",
+        }],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "scalar",
+        }],
+        params: &[
+            param("num", None, "numerator, descending powers of z"),
+            param("den", None, "denominator, descending powers of z"),
+            SAMPLE_TIME_REQUIRED,
+        ],
+        build: build_dtf,
+    },
+    BlockType {
+        name: "unit_delay",
+        category: "discrete",
+        summary: "y(k) = u(k−1): one sample of delay.",
+        doc: "y(k) = x(k), x(k+1) = u(k), x(0) = initial. No direct feedthrough: it closes loops legally.",
+        inputs: &[PortDoc {
+            name: "u",
+            doc: "any width",
+        }],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "same width as u",
+        }],
+        params: &[
+            param("initial", Some("0"), "y(0): a number or one per element"),
+            SAMPLE_TIME_REQUIRED,
+        ],
+        build: build_unit_delay,
+    },
+    BlockType {
+        name: "zero_order_hold",
+        category: "discrete",
+        summary: "Samples its input every T seconds and holds it.",
+        doc: "y(t) = u(t_k) for t_k <= t < t_k + T.",
+        inputs: &[PortDoc {
+            name: "u",
+            doc: "any width",
+        }],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "same width as u",
+        }],
+        params: &[SAMPLE_TIME_REQUIRED],
+        build: build_zoh,
+    },
+];
+
+/// A discrete LTI system: state advanced in `update`, at sample hits.
+pub struct DiscreteLti {
+    ss: StateSpace,
+    x: Vec<f64>,
+    next: Vec<f64>,
+    y: Vec<f64>,
+}
+
+impl DiscreteLti {
+    pub fn new(ss: StateSpace) -> Self {
+        DiscreteLti {
+            x: vec![0.0; ss.n],
+            next: vec![0.0; ss.n],
+            y: vec![0.0; ss.p],
+            ss,
+        }
+    }
+}
+
+impl Block for DiscreteLti {
+    fn initialize(&mut self, _x0: &mut [f64]) {
+        self.x.iter_mut().for_each(|v| *v = 0.0);
+    }
+    fn output(&mut self, io: &mut Io) {
+        self.ss.output(&self.x, io.input(0), &mut self.y);
+        io.output(0).copy_from_slice(&self.y);
+    }
+    fn update(&mut self, io: &mut Io) {
+        self.ss.derivative(&self.x, io.input(0), &mut self.next);
+        std::mem::swap(&mut self.x, &mut self.next);
+    }
+}
+
+fn build_dtf(p: &mut Params) -> Result<Built, Diagnostic> {
+    let (num, den) = (p.vector("num")?, p.vector("den")?);
+    let ss = tf2ss(&num, &den).map_err(|e| lti_error(p, e))?;
+    let st = p.discrete_sample_time()?;
+    let iface = Interface::new(st)
+        .input("u", Width::Fixed(1), ss.has_feedthrough())
+        .output("y", Width::Fixed(1));
+    Ok(Built::new(DiscreteLti::new(ss), iface))
+}
+
+struct UnitDelay {
+    initial: Vec<f64>,
+    x: Vec<f64>,
+}
+
+impl Block for UnitDelay {
+    fn set_width(&mut self, width: usize) -> Result<(), String> {
+        self.initial = initial_vector(&self.initial, width)?;
+        self.x = self.initial.clone();
+        Ok(())
+    }
+    fn initialize(&mut self, _x0: &mut [f64]) {
+        self.x.copy_from_slice(&self.initial);
+    }
+    fn output(&mut self, io: &mut Io) {
+        io.output(0).copy_from_slice(&self.x);
+    }
+    fn update(&mut self, io: &mut Io) {
+        for k in 0..self.x.len() {
+            self.x[k] = io.u_at(0, k);
+        }
+    }
+}
+
+fn build_unit_delay(p: &mut Params) -> Result<Built, Diagnostic> {
+    let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
+    let st = p.discrete_sample_time()?;
+    let iface = Interface::new(st)
+        .input("u", Width::Common, false)
+        .output("y", Width::Common);
+    Ok(Built::new(
+        UnitDelay {
+            initial,
+            x: Vec::new(),
+        },
+        iface,
+    ))
+}
+
+struct Hold;
+
+impl Block for Hold {
+    fn output(&mut self, io: &mut Io) {
+        for k in 0..io.output_width(0) {
+            let v = io.u_at(0, k);
+            io.set_at(0, k, v);
+        }
+    }
+}
+
+fn build_zoh(p: &mut Params) -> Result<Built, Diagnostic> {
+    let st = p.discrete_sample_time()?;
+    Ok(Built::new(
+        Hold,
+        Interface::new(st)
+            .input("u", Width::Common, true)
+            .output("y", Width::Common),
+    ))
+}

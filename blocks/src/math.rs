@@ -1,0 +1,507 @@
+//! Memoryless math: gain, sum, product, divide, abs, sign, min, max, and
+//! `fcn` (an expression of the inputs and time). All elementwise on any
+//! width, scalar inputs broadcast.
+
+use crate::{SAMPLE_TIME_INHERITED, param};
+use ctlgraph_core::expr::Expr;
+use ctlgraph_core::params::{VarScope, expr_diagnostic};
+use ctlgraph_core::registry::{BlockType, Built, PortDoc};
+use ctlgraph_core::yaml::Kind;
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+
+const U_ANY: &[PortDoc] = &[PortDoc {
+    name: "u",
+    doc: "any width",
+}];
+const Y_SAME: &[PortDoc] = &[PortDoc {
+    name: "y",
+    doc: "same width as the input",
+}];
+const UN: &[PortDoc] = &[PortDoc {
+    name: "u1 … un",
+    doc: "any widths; scalars broadcast",
+}];
+const Y_ELEMENTWISE: &[PortDoc] = &[PortDoc {
+    name: "y",
+    doc: "width of the widest input",
+}];
+
+pub const TYPES: &[BlockType] = &[
+    BlockType {
+        name: "gain",
+        category: "math",
+        summary: "Multiplication by a constant: elementwise, or a matrix gain.",
+        doc: "y = k·u. A scalar `k` scales every element; a list applies elementwise (length = input \
+              width); a list of rows is a matrix K and y = K u (width rows(K)).",
+        inputs: U_ANY,
+        outputs: Y_SAME,
+        params: &[
+            param(
+                "k",
+                Some("1"),
+                "number, list (elementwise) or list of rows (matrix)",
+            ),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_gain,
+    },
+    BlockType {
+        name: "sum",
+        category: "math",
+        summary: "Adds and subtracts inputs: signs like `+-+`.",
+        doc: "y = Σ sᵢ·uᵢ with sᵢ from `signs` (one character per input port u1 … un). With a single \
+              sign the block sums the elements of its one (vector) input into a scalar.",
+        inputs: UN,
+        outputs: Y_ELEMENTWISE,
+        params: &[
+            param("signs", Some("++"), "one + or - per input"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_sum,
+    },
+    BlockType {
+        name: "product",
+        category: "math",
+        summary: "Multiplies (and divides) inputs elementwise.",
+        doc: "y = u1 ∘ u2 ∘ … with ∘ from `ops` (`*` multiply, `/` divide), e.g. `**/` = u1·u2/u3. \
+              Division by zero gives ±inf, which stops the run naming this block.",
+        inputs: UN,
+        outputs: Y_ELEMENTWISE,
+        params: &[
+            param("ops", Some("**"), "one * or / per input"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_product,
+    },
+    BlockType {
+        name: "divide",
+        category: "math",
+        summary: "y = u1 / u2, elementwise.",
+        doc: "y = u1 / u2. Division by zero gives ±inf or NaN, which stops the run naming this block.",
+        inputs: &[
+            PortDoc {
+                name: "u1",
+                doc: "numerator",
+            },
+            PortDoc {
+                name: "u2",
+                doc: "denominator",
+            },
+        ],
+        outputs: Y_ELEMENTWISE,
+        params: &[SAMPLE_TIME_INHERITED],
+        build: build_divide,
+    },
+    BlockType {
+        name: "abs",
+        category: "math",
+        summary: "Absolute value, elementwise.",
+        doc: "y = |u|.",
+        inputs: U_ANY,
+        outputs: Y_SAME,
+        params: &[SAMPLE_TIME_INHERITED],
+        build: build_abs,
+    },
+    BlockType {
+        name: "sign",
+        category: "math",
+        summary: "Signum, elementwise: -1, 0 or 1.",
+        doc: "y = sign(u), with sign(0) = 0 (as MATLAB).",
+        inputs: U_ANY,
+        outputs: Y_SAME,
+        params: &[SAMPLE_TIME_INHERITED],
+        build: build_sign,
+    },
+    BlockType {
+        name: "min",
+        category: "math",
+        summary: "Elementwise minimum of the inputs (or of one vector's elements).",
+        doc: "y = min(u1, …, un) elementwise; with `inputs: 1`, the smallest element of u1.",
+        inputs: UN,
+        outputs: Y_ELEMENTWISE,
+        params: &[
+            param("inputs", Some("2"), "number of input ports"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_min,
+    },
+    BlockType {
+        name: "max",
+        category: "math",
+        summary: "Elementwise maximum of the inputs (or of one vector's elements).",
+        doc: "y = max(u1, …, un) elementwise; with `inputs: 1`, the largest element of u1.",
+        inputs: UN,
+        outputs: Y_ELEMENTWISE,
+        params: &[
+            param("inputs", Some("2"), "number of input ports"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_max,
+    },
+    BlockType {
+        name: "fcn",
+        category: "math",
+        summary: "y = an expression of the inputs u1 … un and time t.",
+        doc: "The expression language of parameters (+ - * / ^, sqrt exp ln sin cos tan atan2 abs min \
+              max …, pi) over the scalar inputs `u1` … `un` (`u` when there is one), the time `t` and \
+              the graph's parameters. Compiled once; evaluation allocates nothing. Runs continuously \
+              when it reads `t`, else at the rate of its inputs.",
+        inputs: &[PortDoc {
+            name: "u1 … un",
+            doc: "scalars (`u` when inputs: 1)",
+        }],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "scalar",
+        }],
+        params: &[
+            param("expr", None, "the formula, e.g. \"u1 * sin(2*pi*t)\""),
+            param("inputs", Some("1"), "number of input ports"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_fcn,
+    },
+];
+
+fn port_names(n: usize) -> Vec<String> {
+    (1..=n).map(|i| format!("u{i}")).collect()
+}
+
+/// An elementwise block over n inputs of common width.
+fn nary(p: &mut Params, n: usize, block: impl Block + 'static) -> Result<Built, Diagnostic> {
+    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?);
+    for name in port_names(n) {
+        iface = iface.input(&name, Width::Common, true);
+    }
+    Ok(Built::new(block, iface.output("y", Width::Common)))
+}
+
+/// A unary elementwise function.
+struct Map(fn(f64) -> f64);
+
+impl Block for Map {
+    fn output(&mut self, io: &mut Io) {
+        for k in 0..io.output_width(0) {
+            let v = (self.0)(io.u_at(0, k));
+            io.set_at(0, k, v);
+        }
+    }
+}
+
+fn unary(p: &mut Params, f: fn(f64) -> f64) -> Result<Built, Diagnostic> {
+    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        .input("u", Width::Common, true)
+        .output("y", Width::Common);
+    Ok(Built::new(Map(f), iface))
+}
+
+fn build_abs(p: &mut Params) -> Result<Built, Diagnostic> {
+    unary(p, f64::abs)
+}
+
+/// sign(0) = 0, as MATLAB.
+pub fn sign(v: f64) -> f64 {
+    if v > 0.0 {
+        1.0
+    } else if v < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+fn build_sign(p: &mut Params) -> Result<Built, Diagnostic> {
+    unary(p, sign)
+}
+
+enum Gain {
+    Elementwise(Vec<f64>),
+    /// Row-major, `rows × cols`.
+    Matrix {
+        k: Vec<f64>,
+        cols: usize,
+    },
+}
+
+impl Block for Gain {
+    fn set_width(&mut self, width: usize) -> Result<(), String> {
+        match self {
+            Gain::Elementwise(k) if k.len() == 1 => {
+                let v = k[0];
+                *k = vec![v; width];
+                Ok(())
+            }
+            Gain::Elementwise(k) if k.len() != width => Err(format!(
+                "`k` has {} elements but the signal has width {width}",
+                k.len()
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    fn output(&mut self, io: &mut Io) {
+        match self {
+            Gain::Elementwise(k) => {
+                for (i, ki) in k.iter().enumerate() {
+                    let v = ki * io.u_at(0, i);
+                    io.set_at(0, i, v);
+                }
+            }
+            Gain::Matrix { k, cols } => {
+                for r in 0..io.output_width(0) {
+                    let v: f64 = (0..*cols).map(|c| k[r * *cols + c] * io.u_at(0, c)).sum();
+                    io.set_at(0, r, v);
+                }
+            }
+        }
+    }
+}
+
+fn build_gain(p: &mut Params) -> Result<Built, Diagnostic> {
+    let is_matrix = matches!(p.raw("k").map(|v| &v.kind), Some(Kind::Seq(rows)) if rows.iter().any(|r| matches!(r.kind, Kind::Seq(_))));
+    let st = p.sample_time(SampleTime::Inherited)?;
+    if is_matrix {
+        let rows = p.matrix("k")?;
+        let cols = rows[0].len();
+        if cols == 0 || rows.iter().any(|r| r.len() != cols) {
+            return Err(p.error("k", "matrix rows must all have the same, nonzero length"));
+        }
+        let iface = Interface::new(st)
+            .input("u", Width::Fixed(cols), true)
+            .output("y", Width::Fixed(rows.len()));
+        return Ok(Built::new(
+            Gain::Matrix {
+                k: rows.concat(),
+                cols,
+            },
+            iface,
+        ));
+    }
+    let k = p.opt_vector("k")?.unwrap_or_else(|| vec![1.0]);
+    if k.is_empty() {
+        return Err(p.error("k", "needs at least one number"));
+    }
+    let iface = Interface::new(st)
+        .input("u", Width::Common, true)
+        .output("y", Width::Common);
+    Ok(Built::new(Gain::Elementwise(k), iface))
+}
+
+/// Σ sᵢ uᵢ elementwise, or the sum of one input's elements.
+struct Sum {
+    signs: Vec<f64>,
+}
+
+impl Block for Sum {
+    fn output(&mut self, io: &mut Io) {
+        if self.signs.len() == 1 {
+            let s: f64 = io.input(0).iter().sum();
+            io.set(0, self.signs[0] * s);
+            return;
+        }
+        for k in 0..io.output_width(0) {
+            let v: f64 = self
+                .signs
+                .iter()
+                .enumerate()
+                .map(|(i, s)| s * io.u_at(i, k))
+                .sum();
+            io.set_at(0, k, v);
+        }
+    }
+}
+
+fn build_sum(p: &mut Params) -> Result<Built, Diagnostic> {
+    let text = p.opt_string("signs")?.unwrap_or("++");
+    let signs: Vec<f64> = text
+        .chars()
+        .filter(|c| *c != '|' && !c.is_whitespace())
+        .map(|c| match c {
+            '+' => Ok(1.0),
+            '-' => Ok(-1.0),
+            other => Err(p.error("signs", format!("`{other}` is not a sign: use + and -"))),
+        })
+        .collect::<Result<_, _>>()?;
+    if signs.is_empty() {
+        return Err(p.error("signs", "needs at least one sign"));
+    }
+    if signs.len() == 1 {
+        let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+            .input("u1", Width::Common, true)
+            .output("y", Width::Fixed(1));
+        return Ok(Built::new(Sum { signs }, iface));
+    }
+    let n = signs.len();
+    nary(p, n, Sum { signs })
+}
+
+/// u1 ∘ u2 ∘ … with ∘ ∈ {·, /}.
+struct Product {
+    divide: Vec<bool>,
+}
+
+impl Block for Product {
+    fn output(&mut self, io: &mut Io) {
+        for k in 0..io.output_width(0) {
+            let mut v = 1.0;
+            for (i, &div) in self.divide.iter().enumerate() {
+                let u = io.u_at(i, k);
+                if div { v /= u } else { v *= u }
+            }
+            io.set_at(0, k, v);
+        }
+    }
+}
+
+fn build_product(p: &mut Params) -> Result<Built, Diagnostic> {
+    let text = p.opt_string("ops")?.unwrap_or("**");
+    let divide: Vec<bool> = text
+        .chars()
+        .filter(|c| !c.is_whitespace())
+        .map(|c| match c {
+            '*' => Ok(false),
+            '/' => Ok(true),
+            other => Err(p.error("ops", format!("`{other}` is not an operation: use * and /"))),
+        })
+        .collect::<Result<_, _>>()?;
+    if divide.len() < 2 {
+        return Err(p.error("ops", "needs at least two inputs, e.g. \"**\""));
+    }
+    let n = divide.len();
+    nary(p, n, Product { divide })
+}
+
+fn build_divide(p: &mut Params) -> Result<Built, Diagnostic> {
+    nary(
+        p,
+        2,
+        Product {
+            divide: vec![false, true],
+        },
+    )
+}
+
+/// Elementwise extremum over inputs, or over the elements of one input.
+struct Extremum {
+    max: bool,
+    inputs: usize,
+}
+
+impl Block for Extremum {
+    fn output(&mut self, io: &mut Io) {
+        let pick = |a: f64, b: f64| if self.max { a.max(b) } else { a.min(b) };
+        if self.inputs == 1 {
+            let u = io.input(0);
+            let v = u[1..].iter().fold(u[0], |a, &b| pick(a, b));
+            io.set(0, v);
+            return;
+        }
+        for k in 0..io.output_width(0) {
+            let v = (1..self.inputs).fold(io.u_at(0, k), |a, i| pick(a, io.u_at(i, k)));
+            io.set_at(0, k, v);
+        }
+    }
+}
+
+fn build_extremum(p: &mut Params, max: bool) -> Result<Built, Diagnostic> {
+    let inputs = p.count_or("inputs", 2)?;
+    if inputs == 1 {
+        let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+            .input("u1", Width::Common, true)
+            .output("y", Width::Fixed(1));
+        return Ok(Built::new(Extremum { max, inputs }, iface));
+    }
+    nary(p, inputs, Extremum { max, inputs })
+}
+
+fn build_min(p: &mut Params) -> Result<Built, Diagnostic> {
+    build_extremum(p, false)
+}
+
+fn build_max(p: &mut Params) -> Result<Built, Diagnostic> {
+    build_extremum(p, true)
+}
+
+/// A compiled expression over `[u1, …, un, t]`.
+struct Fcn {
+    expr: Expr,
+    vars: Vec<f64>,
+}
+
+impl Block for Fcn {
+    fn output(&mut self, io: &mut Io) {
+        let n = self.vars.len() - 1;
+        for i in 0..n {
+            self.vars[i] = io.u(i);
+        }
+        self.vars[n] = io.t;
+        let v = self.expr.eval(&self.vars);
+        io.set(0, v);
+    }
+}
+
+fn build_fcn(p: &mut Params) -> Result<Built, Diagnostic> {
+    let n = p.count_or("inputs", 1)?;
+    let Some(src) = p.raw("expr") else {
+        return Err(p.block_error("missing parameter `expr`"));
+    };
+    let (text, pos) = match &src.kind {
+        Kind::Str(s) => (s.clone(), src.pos.clone()),
+        Kind::Num(v) => (v.to_string(), src.pos.clone()),
+        _ => {
+            return Err(p.error(
+                "expr",
+                format!("expected a formula, found {}", src.describe()),
+            ));
+        }
+    };
+    let names = port_names(n);
+    let mut vars: Vec<&str> = names.iter().map(String::as_str).collect();
+    if n == 1 {
+        // `u` and `u1` both name the single input: slot 0 either way.
+        vars = vec!["u1"];
+    }
+    vars.push("t");
+    struct Alias<'a>(VarScope<'a>);
+    impl ctlgraph_core::expr::Scope for Alias<'_> {
+        fn lookup(&self, name: &str) -> Option<ctlgraph_core::expr::Binding> {
+            let name = if name == "u" && self.0.vars.len() == 2 {
+                "u1"
+            } else {
+                name
+            };
+            self.0.lookup(name)
+        }
+        fn names(&self) -> Vec<String> {
+            self.0.names()
+        }
+    }
+    let scope = Alias(VarScope {
+        vars: &vars,
+        params: p.scope(),
+    });
+    let expr = Expr::parse(&text, &scope).map_err(|e| {
+        let d = expr_diagnostic(&e, &pos);
+        Diagnostic {
+            message: format!("block `{}` (fcn): `expr`: {}", p.block_name(), d.message),
+            ..d
+        }
+    })?;
+    let reads_time = expr.uses_slot(n);
+    let default = if reads_time {
+        SampleTime::Continuous
+    } else {
+        SampleTime::Inherited
+    };
+    let mut iface = Interface::new(p.sample_time(default)?);
+    for name in &names {
+        iface = iface.input(name, Width::Fixed(1), true);
+    }
+    Ok(Built::new(
+        Fcn {
+            expr,
+            vars: vec![0.0; n + 1],
+        },
+        iface.output("y", Width::Fixed(1)),
+    ))
+}

@@ -1,0 +1,206 @@
+//! Static and slew nonlinearities: saturation, dead zone, rate limiter.
+
+use crate::{SAMPLE_TIME_INHERITED, param};
+use ctlgraph_core::registry::{BlockType, Built, PortDoc};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+
+const U: &[PortDoc] = &[PortDoc {
+    name: "u",
+    doc: "any width",
+}];
+const Y: &[PortDoc] = &[PortDoc {
+    name: "y",
+    doc: "same width as u",
+}];
+
+pub const TYPES: &[BlockType] = &[
+    BlockType {
+        name: "saturation",
+        category: "nonlinear",
+        summary: "Limits a signal to [lower, upper].",
+        doc: "y = min(max(u, lower), upper), elementwise. NaN in, NaN out (the run then stops).",
+        inputs: U,
+        outputs: Y,
+        params: &[
+            param("lower", Some("-1"), "lower limit (may be -inf)"),
+            param("upper", Some("1"), "upper limit, >= lower (may be inf)"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_saturation,
+    },
+    BlockType {
+        name: "dead_zone",
+        category: "nonlinear",
+        summary: "Zero output inside [start, end], shifted input outside.",
+        doc: "y = 0 for start <= u <= end; y = u − end above; y = u − start below (Simulink's Dead Zone).",
+        inputs: U,
+        outputs: Y,
+        params: &[
+            param("start", Some("-0.5"), "lower edge of the dead zone"),
+            param("end", Some("0.5"), "upper edge, >= start"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_dead_zone,
+    },
+    BlockType {
+        name: "rate_limiter",
+        category: "nonlinear",
+        summary: "Limits how fast a signal may rise and fall.",
+        doc: "With y⁻ and t⁻ the output and time of the last major step (or sample hit): \
+              y = y⁻ + clamp((u − y⁻)/(t − t⁻), falling, rising)·(t − t⁻). The output starts at \
+              `initial` and slews from there, so |dy/dt| never exceeds the limits. Continuous by \
+              default (evaluated at minor steps too); with a sample time it is a discrete limiter.",
+        inputs: U,
+        outputs: Y,
+        params: &[
+            param(
+                "rising",
+                Some("1"),
+                "largest rate of increase [units/s], > 0",
+            ),
+            param("falling", Some("-1"), "most negative rate [units/s], < 0"),
+            param("initial", Some("0"), "output at t = 0"),
+            param("sample_time", Some("0"), "0 continuous, T > 0 discrete"),
+        ],
+        build: build_rate_limiter,
+    },
+];
+
+fn elementwise(p: &mut Params, block: impl Block + 'static) -> Result<Built, Diagnostic> {
+    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        .input("u", Width::Common, true)
+        .output("y", Width::Common);
+    Ok(Built::new(block, iface))
+}
+
+/// Clamps to [lower, upper].
+pub struct Saturation {
+    pub lower: f64,
+    pub upper: f64,
+}
+
+impl Block for Saturation {
+    fn output(&mut self, io: &mut Io) {
+        for k in 0..io.output_width(0) {
+            let v = io.u_at(0, k).max(self.lower).min(self.upper);
+            io.set_at(0, k, v);
+        }
+    }
+}
+
+/// Reads `lower`/`upper`-style limit pairs, checking their order.
+pub(crate) fn limits(
+    p: &mut Params,
+    lo: &str,
+    hi: &str,
+    defaults: (f64, f64),
+) -> Result<(f64, f64), Diagnostic> {
+    let (lower, upper) = (p.number_or(lo, defaults.0)?, p.number_or(hi, defaults.1)?);
+    if lower > upper || lower.is_nan() || upper.is_nan() {
+        return Err(p.error(hi, format!("`{hi}` ({upper}) must be >= `{lo}` ({lower})")));
+    }
+    Ok((lower, upper))
+}
+
+fn build_saturation(p: &mut Params) -> Result<Built, Diagnostic> {
+    let (lower, upper) = limits(p, "lower", "upper", (-1.0, 1.0))?;
+    elementwise(p, Saturation { lower, upper })
+}
+
+struct DeadZone {
+    start: f64,
+    end: f64,
+}
+
+impl Block for DeadZone {
+    fn output(&mut self, io: &mut Io) {
+        for k in 0..io.output_width(0) {
+            let u = io.u_at(0, k);
+            let v = if u > self.end {
+                u - self.end
+            } else if u < self.start {
+                u - self.start
+            } else {
+                0.0
+            };
+            io.set_at(0, k, v);
+        }
+    }
+}
+
+fn build_dead_zone(p: &mut Params) -> Result<Built, Diagnostic> {
+    let (start, end) = limits(p, "start", "end", (-0.5, 0.5))?;
+    elementwise(p, DeadZone { start, end })
+}
+
+/// Slew-rate limiter; see the type's doc for the equation.
+pub struct RateLimiter {
+    pub rising: f64,
+    pub falling: f64,
+    pub initial: f64,
+    /// Output and time at the last major step.
+    last: Vec<f64>,
+    last_t: f64,
+    /// Output computed at the current major step, committed by `update`.
+    current: Vec<f64>,
+}
+
+impl RateLimiter {
+    pub fn new(rising: f64, falling: f64, initial: f64) -> Self {
+        RateLimiter {
+            rising,
+            falling,
+            initial,
+            last: vec![initial],
+            last_t: 0.0,
+            current: vec![initial],
+        }
+    }
+}
+
+impl Block for RateLimiter {
+    fn set_width(&mut self, width: usize) -> Result<(), String> {
+        self.last = vec![self.initial; width];
+        self.current = vec![self.initial; width];
+        Ok(())
+    }
+
+    fn initialize(&mut self, _x0: &mut [f64]) {
+        self.last.iter_mut().for_each(|v| *v = self.initial);
+        self.current.iter_mut().for_each(|v| *v = self.initial);
+        self.last_t = 0.0;
+    }
+
+    fn output(&mut self, io: &mut Io) {
+        let dt = io.t - self.last_t;
+        for k in 0..self.last.len() {
+            let y = if dt > 0.0 {
+                let rate = ((io.u_at(0, k) - self.last[k]) / dt).clamp(self.falling, self.rising);
+                self.last[k] + rate * dt
+            } else {
+                self.last[k]
+            };
+            self.current[k] = y;
+            io.set_at(0, k, y);
+        }
+    }
+
+    fn update(&mut self, io: &mut Io) {
+        self.last.copy_from_slice(&self.current);
+        self.last_t = io.t;
+    }
+}
+
+fn build_rate_limiter(p: &mut Params) -> Result<Built, Diagnostic> {
+    let rising = p.number_where("rising", Some(1.0), |v| v > 0.0, "positive")?;
+    let falling = p.number_where("falling", Some(-1.0), |v| v < 0.0, "negative")?;
+    let initial = p.number_or("initial", 0.0)?;
+    let st = p.sample_time(SampleTime::Continuous)?;
+    let iface = Interface::new(st)
+        .input("u", Width::Common, true)
+        .output("y", Width::Common);
+    Ok(Built::new(
+        RateLimiter::new(rising, falling, initial),
+        iface,
+    ))
+}

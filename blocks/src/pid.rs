@@ -1,0 +1,246 @@
+//! The PID controller: parallel form with a filtered derivative, output
+//! limits with anti-windup, continuous or discrete, and optional gain
+//! input ports for gain scheduling.
+
+use crate::param;
+use ctlgraph_core::registry::{BlockType, Built, PortDoc};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+
+pub const TYPES: &[BlockType] = &[BlockType {
+    name: "pid",
+    category: "control",
+    summary: "PID controller: parallel form, filtered derivative, limits with anti-windup.",
+    doc: "u = sat(kp·e + I + D) with\n\
+          \x20 I' = ki·e (+ anti-windup),  D = kd·N·(e − x_f),  x_f' = N·(e − x_f),\n\
+          i.e. C(s) = kp + ki/s + kd·N·s/(s + N). The integrator holds ∫ki·e (not ∫e), so changing ki \
+          through its port does not make the output jump. Anti-windup while the output is limited: \
+          `clamping` stops integrating when ki·e would drive the output further into the limit; \
+          `back_calculation` adds kb·(u − v) to I' (v the unlimited output); `none` does neither.\n\
+          Discrete (sample_time T > 0): I(k+1) = I(k) + T·(ki·e(k) + anti-windup) (forward Euler, \
+          Simulink's default), and the filter by backward Euler, x_f(k) = (x_f(k−1) + N·T·e(k))/(1 + N·T), \
+          which is stable for every N·T.\n\
+          `gain_inputs: [kp, ki]` adds input ports of those names whose values replace the parameters \
+          at every step (gain scheduling, fuzzy tuning).",
+    inputs: &[
+        PortDoc {
+            name: "e",
+            doc: "control error (scalar)",
+        },
+        PortDoc {
+            name: "kp, ki, kd",
+            doc: "only those listed in `gain_inputs`",
+        },
+    ],
+    outputs: &[PortDoc {
+        name: "u",
+        doc: "control signal (scalar)",
+    }],
+    params: &[
+        param("kp", Some("1"), "proportional gain"),
+        param("ki", Some("0"), "integral gain [1/s]"),
+        param("kd", Some("0"), "derivative gain [s]"),
+        param("n", Some("100"), "derivative filter coefficient N [rad/s]"),
+        param("lower", Some("-inf"), "lower output limit"),
+        param("upper", Some("inf"), "upper output limit"),
+        param(
+            "anti_windup",
+            Some("clamping"),
+            "clamping | back_calculation | none",
+        ),
+        param("kb", Some("1"), "back-calculation gain [1/s]"),
+        param("initial", Some("0"), "initial integrator output I(0)"),
+        param(
+            "gain_inputs",
+            Some("[]"),
+            "gains read from input ports each step: any of kp, ki, kd",
+        ),
+        param("sample_time", Some("0"), "0 continuous, T > 0 discrete"),
+    ],
+    build: build_pid,
+}];
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AntiWindup {
+    Clamping,
+    BackCalculation { kb: f64 },
+    None,
+}
+
+/// Gains, limits and anti-windup, shared by both forms.
+#[derive(Clone, Debug)]
+pub struct PidLaw {
+    pub kp: f64,
+    pub ki: f64,
+    pub kd: f64,
+    pub n: f64,
+    pub lower: f64,
+    pub upper: f64,
+    pub anti_windup: AntiWindup,
+    /// Input port of kp, ki, kd when they come from a port.
+    pub gain_ports: [Option<usize>; 3],
+}
+
+impl PidLaw {
+    fn gains(&self, io: &Io) -> [f64; 3] {
+        let g = [self.kp, self.ki, self.kd];
+        std::array::from_fn(|i| self.gain_ports[i].map_or(g[i], |p| io.u(p)))
+    }
+
+    /// The integrator's input: ki·e with anti-windup, given the unlimited
+    /// output `v` and the limited `u`.
+    fn integrand(&self, ki_e: f64, v: f64, u: f64) -> f64 {
+        match self.anti_windup {
+            AntiWindup::None => ki_e,
+            AntiWindup::BackCalculation { kb } => ki_e + kb * (u - v),
+            AntiWindup::Clamping => {
+                let pushing = (v > u && ki_e > 0.0) || (v < u && ki_e < 0.0);
+                if pushing { 0.0 } else { ki_e }
+            }
+        }
+    }
+}
+
+/// Continuous PID: states [I, x_f] integrated by the solver.
+struct ContinuousPid {
+    law: PidLaw,
+    initial: f64,
+}
+
+impl ContinuousPid {
+    /// (v, u, ki·e): unlimited and limited output.
+    fn eval(&self, io: &Io) -> (f64, f64, f64) {
+        let [kp, ki, kd] = self.law.gains(io);
+        let e = io.u(0);
+        let v = kp * e + io.x[0] + kd * self.law.n * (e - io.x[1]);
+        (v, v.clamp(self.law.lower, self.law.upper), ki * e)
+    }
+}
+
+impl Block for ContinuousPid {
+    fn num_states(&self) -> usize {
+        2
+    }
+    fn initialize(&mut self, x0: &mut [f64]) {
+        x0[0] = self.initial;
+        x0[1] = 0.0;
+    }
+    fn output(&mut self, io: &mut Io) {
+        let (_, u, _) = self.eval(io);
+        io.set(0, u);
+    }
+    fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
+        let (v, u, ki_e) = self.eval(io);
+        dx[0] = self.law.integrand(ki_e, v, u);
+        dx[1] = self.law.n * (io.u(0) - io.x[1]);
+    }
+}
+
+/// Discrete PID: forward-Euler integral, backward-Euler derivative filter.
+struct DiscretePid {
+    law: PidLaw,
+    period: f64,
+    initial: f64,
+    integral: f64,
+    filter: f64,
+}
+
+impl DiscretePid {
+    /// (v, u, ki·e, new filter state).
+    fn eval(&self, io: &Io) -> (f64, f64, f64, f64) {
+        let [kp, ki, kd] = self.law.gains(io);
+        let e = io.u(0);
+        let nt = self.law.n * self.period;
+        let filter = (self.filter + nt * e) / (1.0 + nt);
+        let v = kp * e + self.integral + kd * self.law.n * (e - filter);
+        (v, v.clamp(self.law.lower, self.law.upper), ki * e, filter)
+    }
+}
+
+impl Block for DiscretePid {
+    fn initialize(&mut self, _x0: &mut [f64]) {
+        self.integral = self.initial;
+        self.filter = 0.0;
+    }
+    fn output(&mut self, io: &mut Io) {
+        let (_, u, _, _) = self.eval(io);
+        io.set(0, u);
+    }
+    fn update(&mut self, io: &mut Io) {
+        let (v, u, ki_e, filter) = self.eval(io);
+        self.integral += self.period * self.law.integrand(ki_e, v, u);
+        self.filter = filter;
+    }
+}
+
+fn build_pid(p: &mut Params) -> Result<Built, Diagnostic> {
+    let (kp, ki, kd) = (
+        p.number_or("kp", 1.0)?,
+        p.number_or("ki", 0.0)?,
+        p.number_or("kd", 0.0)?,
+    );
+    let n = p.number_where(
+        "n",
+        Some(100.0),
+        |v| v > 0.0 && v.is_finite(),
+        "a positive filter coefficient",
+    )?;
+    let (lower, upper) =
+        crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
+    let kb = p.number_or("kb", 1.0)?;
+    let anti_windup = match p.choice("anti_windup", &["clamping", "back_calculation", "none"])? {
+        "back_calculation" => AntiWindup::BackCalculation { kb },
+        "none" => AntiWindup::None,
+        _ => AntiWindup::Clamping,
+    };
+    let initial = p.number_or("initial", 0.0)?;
+    let mut gain_ports = [None; 3];
+    let mut iface_ports = vec!["e"];
+    for name in p.strings("gain_inputs")? {
+        let Some(i) = ["kp", "ki", "kd"].iter().position(|g| *g == name) else {
+            return Err(p
+                .error(
+                    "gain_inputs",
+                    format!("`{name}` is not a gain: use kp, ki, kd"),
+                )
+                .suggest(name, ["kp", "ki", "kd"]));
+        };
+        if gain_ports[i].is_some() {
+            return Err(p.error("gain_inputs", format!("`{name}` is listed twice")));
+        }
+        gain_ports[i] = Some(iface_ports.len());
+        iface_ports.push(name);
+    }
+    let law = PidLaw {
+        kp,
+        ki,
+        kd,
+        n,
+        lower,
+        upper,
+        anti_windup,
+        gain_ports,
+    };
+    let st = p.sample_time(SampleTime::Continuous)?;
+    let mut iface = Interface::new(st);
+    for name in iface_ports {
+        iface = iface.input(name, Width::Fixed(1), true);
+    }
+    let iface = iface.output("u", Width::Fixed(1));
+    match st {
+        SampleTime::Discrete { period, .. } => Ok(Built::new(
+            DiscretePid {
+                law,
+                period,
+                initial,
+                integral: initial,
+                filter: 0.0,
+            },
+            iface,
+        )),
+        SampleTime::Continuous => Ok(Built::new(ContinuousPid { law, initial }, iface)),
+        other => Err(p.error(
+            "sample_time",
+            format!("a PID is continuous (0) or discrete (T > 0), not {other}"),
+        )),
+    }
+}

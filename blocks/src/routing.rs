@@ -1,0 +1,317 @@
+//! Signal routing: mux, demux, selector, switch, and the structural types
+//! the loader handles itself (subsystem, inport, outport), listed here so
+//! `ctlgraph blocks` documents them.
+
+use crate::{SAMPLE_TIME_INHERITED, param};
+use ctlgraph_core::registry::{BlockType, Built, PortDoc};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+
+pub const TYPES: &[BlockType] = &[
+    BlockType {
+        name: "mux",
+        category: "routing",
+        summary: "Concatenates inputs into one vector signal.",
+        doc: "y = [u1; u2; …; un]. Input widths from `widths` (default: `inputs` scalars).",
+        inputs: &[PortDoc {
+            name: "u1 … un",
+            doc: "widths as given",
+        }],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "width = sum of the input widths",
+        }],
+        params: &[
+            param(
+                "inputs",
+                Some("2"),
+                "number of scalar inputs (when `widths` is not given)",
+            ),
+            param("widths", None, "width of each input, e.g. [2, 1]"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_mux,
+    },
+    BlockType {
+        name: "demux",
+        category: "routing",
+        summary: "Splits a vector signal into parts.",
+        doc: "[y1; y2; …; yn] = u. Output widths from `widths` (default: `outputs` scalars).",
+        inputs: &[PortDoc {
+            name: "u",
+            doc: "width = sum of the output widths",
+        }],
+        outputs: &[PortDoc {
+            name: "y1 … yn",
+            doc: "widths as given",
+        }],
+        params: &[
+            param(
+                "outputs",
+                Some("2"),
+                "number of scalar outputs (when `widths` is not given)",
+            ),
+            param("widths", None, "width of each output"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_demux,
+    },
+    BlockType {
+        name: "selector",
+        category: "routing",
+        summary: "Picks elements of a vector by 1-based index.",
+        doc: "y[i] = u[indices[i]], indices counted from 1 (as MATLAB); repeats allowed.",
+        inputs: &[PortDoc {
+            name: "u",
+            doc: "any width >= the largest index",
+        }],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "width = number of indices",
+        }],
+        params: &[
+            param("indices", None, "list of 1-based indices"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_selector,
+    },
+    BlockType {
+        name: "switch",
+        category: "routing",
+        summary: "Passes u1 or u2 depending on a control signal.",
+        doc: "y = u1 if control passes the criterion, else u2. Criteria: `>=` (control >= threshold), \
+              `>` (control > threshold), `!=0` (control ≠ 0). Ports in Simulink's order: u1, control, u2.",
+        inputs: &[
+            PortDoc {
+                name: "u1",
+                doc: "passed when the criterion holds",
+            },
+            PortDoc {
+                name: "control",
+                doc: "scalar",
+            },
+            PortDoc {
+                name: "u2",
+                doc: "passed otherwise",
+            },
+        ],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "width of u1/u2",
+        }],
+        params: &[
+            param("threshold", Some("0"), "compared with control"),
+            param("criterion", Some(">="), ">= | > | !=0"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_switch,
+    },
+    BlockType {
+        name: "subsystem",
+        category: "structure",
+        summary: "Another graph file used as a block.",
+        doc: "Loads `file` (relative to this file) and inlines its blocks as `name/inner` at compile \
+              time: no run-time cost. Its `inport` blocks are this block's inputs and its `outport` \
+              blocks its outputs, named after them (`ctrl.r`, `ctrl.u`). `parameters` overrides the \
+              subsystem's own parameters; values are expressions over this file's parameters.",
+        inputs: &[PortDoc {
+            name: "(inports)",
+            doc: "one per inport block of the file",
+        }],
+        outputs: &[PortDoc {
+            name: "(outports)",
+            doc: "one per outport block of the file",
+        }],
+        params: &[
+            param("file", None, "graph file, relative to this one"),
+            param(
+                "parameters",
+                Some("{}"),
+                "overrides of the subsystem's parameters",
+            ),
+        ],
+        build: structural,
+    },
+    BlockType {
+        name: "inport",
+        category: "structure",
+        summary: "An input of a subsystem (the block's name is the port's name).",
+        doc: "Inside a subsystem file: the signal wired to the subsystem's port of this name. Resolved \
+              at compile time; costs nothing at run time.",
+        inputs: &[],
+        outputs: &[PortDoc {
+            name: "out",
+            doc: "the outer signal",
+        }],
+        params: &[],
+        build: structural,
+    },
+    BlockType {
+        name: "outport",
+        category: "structure",
+        summary: "An output of a subsystem (the block's name is the port's name).",
+        doc: "Inside a subsystem file: wire the signal to export into it. Resolved at compile time.",
+        inputs: &[PortDoc {
+            name: "in",
+            doc: "the signal to export",
+        }],
+        outputs: &[],
+        params: &[],
+        build: structural,
+    },
+];
+
+/// Never called: the loader and compiler handle these types themselves.
+fn structural(p: &mut Params) -> Result<Built, Diagnostic> {
+    Err(p.block_error("structural block built directly (internal error)"))
+}
+
+fn widths(p: &mut Params, count_key: &str) -> Result<Vec<usize>, Diagnostic> {
+    if let Some(ws) = p.opt_vector("widths")? {
+        if ws.is_empty() || ws.iter().any(|w| *w < 1.0 || w.fract() != 0.0) {
+            return Err(p.error("widths", "must be positive whole numbers"));
+        }
+        return Ok(ws.iter().map(|w| *w as usize).collect());
+    }
+    Ok(vec![1; p.count_or(count_key, 2)?])
+}
+
+/// Concatenates the inputs in port order.
+struct Concat;
+
+impl Block for Concat {
+    fn output(&mut self, io: &mut Io) {
+        let mut k = 0;
+        for port in 0..io.num_inputs() {
+            for j in 0..io.input_width(port) {
+                let v = io.input(port)[j];
+                io.set_at(0, k, v);
+                k += 1;
+            }
+        }
+    }
+}
+
+fn build_mux(p: &mut Params) -> Result<Built, Diagnostic> {
+    let ws = widths(p, "inputs")?;
+    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?);
+    for (i, w) in ws.iter().enumerate() {
+        iface = iface.input(&format!("u{}", i + 1), Width::Fixed(*w), true);
+    }
+    Ok(Built::new(
+        Concat,
+        iface.output("y", Width::Fixed(ws.iter().sum())),
+    ))
+}
+
+struct Split(Vec<usize>);
+
+impl Block for Split {
+    fn output(&mut self, io: &mut Io) {
+        let mut k = 0;
+        for (port, &w) in self.0.iter().enumerate() {
+            for j in 0..w {
+                let v = io.input(0)[k];
+                io.set_at(port, j, v);
+                k += 1;
+            }
+        }
+    }
+}
+
+fn build_demux(p: &mut Params) -> Result<Built, Diagnostic> {
+    let ws = widths(p, "outputs")?;
+    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).input(
+        "u",
+        Width::Fixed(ws.iter().sum()),
+        true,
+    );
+    for (i, w) in ws.iter().enumerate() {
+        iface = iface.output(&format!("y{}", i + 1), Width::Fixed(*w));
+    }
+    Ok(Built::new(Split(ws), iface))
+}
+
+struct Selector(Vec<usize>);
+
+impl Block for Selector {
+    fn set_width(&mut self, width: usize) -> Result<(), String> {
+        match self.0.iter().find(|&&i| i >= width) {
+            Some(i) => Err(format!(
+                "index {} is beyond the input's width {width}",
+                i + 1
+            )),
+            None => Ok(()),
+        }
+    }
+    fn output(&mut self, io: &mut Io) {
+        for (k, &i) in self.0.iter().enumerate() {
+            let v = io.input(0)[i];
+            io.set_at(0, k, v);
+        }
+    }
+}
+
+fn build_selector(p: &mut Params) -> Result<Built, Diagnostic> {
+    let idx = p.vector("indices")?;
+    if idx.is_empty() || idx.iter().any(|i| *i < 1.0 || i.fract() != 0.0) {
+        return Err(p.error(
+            "indices",
+            "must be whole numbers >= 1 (indices count from 1)",
+        ));
+    }
+    let idx: Vec<usize> = idx.iter().map(|i| *i as usize - 1).collect();
+    let n = idx.len();
+    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        .input("u", Width::Common, true)
+        .output("y", Width::Fixed(n));
+    Ok(Built::new(Selector(idx), iface))
+}
+
+#[derive(Clone, Copy)]
+enum Criterion {
+    AtLeast,
+    Above,
+    NonZero,
+}
+
+struct Switch {
+    threshold: f64,
+    criterion: Criterion,
+}
+
+impl Block for Switch {
+    fn output(&mut self, io: &mut Io) {
+        let c = io.u(1);
+        let first = match self.criterion {
+            Criterion::AtLeast => c >= self.threshold,
+            Criterion::Above => c > self.threshold,
+            Criterion::NonZero => c != 0.0,
+        };
+        let port = if first { 0 } else { 2 };
+        for k in 0..io.output_width(0) {
+            let v = io.u_at(port, k);
+            io.set_at(0, k, v);
+        }
+    }
+}
+
+fn build_switch(p: &mut Params) -> Result<Built, Diagnostic> {
+    let threshold = p.number_or("threshold", 0.0)?;
+    let criterion = match p.choice("criterion", &[">=", ">", "!=0"])? {
+        ">" => Criterion::Above,
+        "!=0" => Criterion::NonZero,
+        _ => Criterion::AtLeast,
+    };
+    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        .input("u1", Width::Common, true)
+        .input("control", Width::Fixed(1), true)
+        .input("u2", Width::Common, true)
+        .output("y", Width::Common);
+    Ok(Built::new(
+        Switch {
+            threshold,
+            criterion,
+        },
+        iface,
+    ))
+}

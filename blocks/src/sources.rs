@@ -1,0 +1,280 @@
+//! Sources: constant, step, ramp, sine, pulse, clock.
+
+use crate::{SAMPLE_TIME_CONTINUOUS, param};
+use ctlgraph_core::registry::{BlockType, Built, PortDoc};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+
+pub const TYPES: &[BlockType] = &[
+    BlockType {
+        name: "constant",
+        category: "sources",
+        summary: "A constant value (scalar or vector).",
+        doc: "y = value. Computed once, at the start of the run.",
+        inputs: &[],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "the value; width = number of elements of `value`",
+        }],
+        params: &[param("value", Some("1"), "a number or a list of numbers")],
+        build: build_constant,
+    },
+    BlockType {
+        name: "step",
+        category: "sources",
+        summary: "A step from `initial` to `value` at time `at`.",
+        doc: "y = initial for t < at, y = value for t >= at. The simulator puts a major step exactly \
+              at `at`; the solver's stages before it see `initial`, after it `value`.",
+        inputs: &[],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "scalar",
+        }],
+        params: &[
+            param("at", Some("0"), "switching time [s]"),
+            param("initial", Some("0"), "value before `at`"),
+            param("value", Some("1"), "value from `at` on"),
+            SAMPLE_TIME_CONTINUOUS,
+        ],
+        build: build_step,
+    },
+    BlockType {
+        name: "ramp",
+        category: "sources",
+        summary: "A ramp of given slope starting at time `start`.",
+        doc: "y = initial for t < start, y = initial + slope·(t − start) for t >= start.",
+        inputs: &[],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "scalar",
+        }],
+        params: &[
+            param("slope", Some("1"), "units per second"),
+            param("start", Some("0"), "start time [s]"),
+            param("initial", Some("0"), "output before `start`"),
+            SAMPLE_TIME_CONTINUOUS,
+        ],
+        build: build_ramp,
+    },
+    BlockType {
+        name: "sine",
+        category: "sources",
+        summary: "A sine wave.",
+        doc: "y = bias + amplitude·sin(2π·frequency·t + phase). `frequency` is in Hz (not rad/s).",
+        inputs: &[],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "scalar",
+        }],
+        params: &[
+            param("amplitude", Some("1"), "peak value"),
+            param("frequency", Some("1"), "[Hz]"),
+            param("phase", Some("0"), "[rad]"),
+            param("bias", Some("0"), "offset added to the wave"),
+            SAMPLE_TIME_CONTINUOUS,
+        ],
+        build: build_sine,
+    },
+    BlockType {
+        name: "pulse",
+        category: "sources",
+        summary: "A periodic rectangular pulse train.",
+        doc: "y = amplitude during the first `duty`·period of every period from `delay` on, else 0. \
+              Every edge is an event: the simulator steps exactly onto it.",
+        inputs: &[],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "scalar",
+        }],
+        params: &[
+            param("amplitude", Some("1"), "pulse height"),
+            param("period", Some("1"), "[s], > 0"),
+            param(
+                "duty",
+                Some("0.5"),
+                "fraction of the period the pulse is high, in (0, 1)",
+            ),
+            param("delay", Some("0"), "time of the first rising edge [s]"),
+            SAMPLE_TIME_CONTINUOUS,
+        ],
+        build: build_pulse,
+    },
+    BlockType {
+        name: "clock",
+        category: "sources",
+        summary: "The simulation time.",
+        doc: "y = t.",
+        inputs: &[],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "scalar",
+        }],
+        params: &[SAMPLE_TIME_CONTINUOUS],
+        build: build_clock,
+    },
+];
+
+/// A source whose output is a function of time only.
+struct TimeFn<F: Fn(&Io) -> f64 + Send> {
+    f: F,
+    events: Vec<f64>,
+}
+
+impl<F: Fn(&Io) -> f64 + Send> Block for TimeFn<F> {
+    fn output(&mut self, io: &mut Io) {
+        let y = (self.f)(io);
+        io.set(0, y);
+    }
+
+    fn next_event(&self, t: f64) -> f64 {
+        self.events
+            .iter()
+            .copied()
+            .find(|&e| e > t)
+            .unwrap_or(f64::INFINITY)
+    }
+}
+
+fn scalar_source<F: Fn(&Io) -> f64 + Send + 'static>(
+    p: &mut Params,
+    events: Vec<f64>,
+    f: F,
+) -> Result<Built, Diagnostic> {
+    let st = p.sample_time(SampleTime::Continuous)?;
+    Ok(Built::new(
+        TimeFn { f, events },
+        Interface::new(st).output("y", Width::Fixed(1)),
+    ))
+}
+
+fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
+    let value = p.opt_vector("value")?.unwrap_or_else(|| vec![1.0]);
+    if value.is_empty() {
+        return Err(p.error("value", "needs at least one number"));
+    }
+    struct Constant(Vec<f64>);
+    impl Block for Constant {
+        fn output(&mut self, io: &mut Io) {
+            io.output(0).copy_from_slice(&self.0);
+        }
+    }
+    let iface = Interface::new(SampleTime::Constant).output("y", Width::Fixed(value.len()));
+    Ok(Built::new(Constant(value), iface))
+}
+
+fn build_step(p: &mut Params) -> Result<Built, Diagnostic> {
+    let at = p.number_or("at", 0.0)?;
+    let (initial, value) = (p.number_or("initial", 0.0)?, p.number_or("value", 1.0)?);
+    scalar_source(
+        p,
+        vec![at],
+        move |io| if io.reached(at) { value } else { initial },
+    )
+}
+
+fn build_ramp(p: &mut Params) -> Result<Built, Diagnostic> {
+    let (slope, start, initial) = (
+        p.number_or("slope", 1.0)?,
+        p.number_or("start", 0.0)?,
+        p.number_or("initial", 0.0)?,
+    );
+    scalar_source(p, vec![start], move |io| {
+        if io.t > start {
+            initial + slope * (io.t - start)
+        } else {
+            initial
+        }
+    })
+}
+
+fn build_sine(p: &mut Params) -> Result<Built, Diagnostic> {
+    let amplitude = p.number_or("amplitude", 1.0)?;
+    let w = 2.0 * std::f64::consts::PI * p.number_or("frequency", 1.0)?;
+    let (phase, bias) = (p.number_or("phase", 0.0)?, p.number_or("bias", 0.0)?);
+    scalar_source(p, Vec::new(), move |io| {
+        bias + amplitude * (w * io.t + phase).sin()
+    })
+}
+
+fn build_clock(p: &mut Params) -> Result<Built, Diagnostic> {
+    scalar_source(p, Vec::new(), |io| io.t)
+}
+
+fn build_pulse(p: &mut Params) -> Result<Built, Diagnostic> {
+    let amplitude = p.number_or("amplitude", 1.0)?;
+    let period = p.number_where(
+        "period",
+        Some(1.0),
+        |v| v > 0.0 && v.is_finite(),
+        "a positive number",
+    )?;
+    let duty = p.number_where(
+        "duty",
+        Some(0.5),
+        |v| v > 0.0 && v < 1.0,
+        "strictly between 0 and 1",
+    )?;
+    let delay = p.number_or("delay", 0.0)?;
+    let st = p.sample_time(SampleTime::Continuous)?;
+    let pulse = Pulse {
+        amplitude,
+        period,
+        high: duty * period,
+        delay,
+    };
+    Ok(Built::new(
+        pulse,
+        Interface::new(st).output("y", Width::Fixed(1)),
+    ))
+}
+
+/// Edges are computed as `delay + k·period` (and `+ high`), the same
+/// expressions `next_event` hands the simulator, so `reached` compares equal
+/// floating-point values at the edges.
+struct Pulse {
+    amplitude: f64,
+    period: f64,
+    high: f64,
+    delay: f64,
+}
+
+impl Pulse {
+    fn index(&self, t: f64) -> f64 {
+        ((t - self.delay) / self.period).floor()
+    }
+}
+
+impl Block for Pulse {
+    fn output(&mut self, io: &mut Io) {
+        let k = self.index(io.t);
+        let mut y = 0.0;
+        for cand in [k + 1.0, k, k - 1.0] {
+            let rise = self.delay + cand * self.period;
+            if cand >= 0.0 && io.reached(rise) {
+                y = if io.reached(rise + self.high) {
+                    0.0
+                } else {
+                    self.amplitude
+                };
+                break;
+            }
+        }
+        io.set(0, y);
+    }
+
+    fn next_event(&self, t: f64) -> f64 {
+        let k = self.index(t).max(0.0);
+        let mut best = f64::INFINITY;
+        for cand in [k - 1.0, k, k + 1.0, k + 2.0] {
+            if cand < 0.0 {
+                continue;
+            }
+            let rise = self.delay + cand * self.period;
+            for e in [rise, rise + self.high] {
+                if e > t && e < best {
+                    best = e;
+                }
+            }
+        }
+        best
+    }
+}

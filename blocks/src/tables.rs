@@ -1,0 +1,261 @@
+//! Tabulated data: 1-D lookup tables and time series read from CSV files,
+//! both by linear interpolation.
+
+use crate::{SAMPLE_TIME_CONTINUOUS, SAMPLE_TIME_INHERITED, param};
+use ctlgraph_core::registry::{BlockType, Built, PortDoc};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+
+pub const TYPES: &[BlockType] = &[
+    BlockType {
+        name: "lookup_table_1d",
+        category: "math",
+        summary: "Piecewise-linear map y = f(u) from breakpoints.",
+        doc: "Linear interpolation between (x[i], y[i]); x strictly increasing. Outside [x0, xn]: \
+              `clamp` holds the end values, `linear` extends the first/last segment. Elementwise.",
+        inputs: &[PortDoc {
+            name: "u",
+            doc: "any width",
+        }],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "same width as u",
+        }],
+        params: &[
+            param("x", None, "breakpoints, strictly increasing, at least two"),
+            param("y", None, "table values, one per breakpoint"),
+            param("extrapolation", Some("clamp"), "clamp | linear"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_lookup,
+    },
+    BlockType {
+        name: "from_csv",
+        category: "sources",
+        summary: "A time series read from a CSV file, linearly interpolated.",
+        doc: "Reads column `column` against column `time` (header names) from `file`, relative to the \
+              graph file. Times must be non-decreasing; a repeated time is a jump. Outside the data: \
+              `hold` keeps the end values, `linear` extends the end segments, `zero` outputs 0.",
+        inputs: &[],
+        outputs: &[PortDoc {
+            name: "y",
+            doc: "scalar",
+        }],
+        params: &[
+            param("file", None, "CSV file with a header row"),
+            param("column", None, "header of the value column"),
+            param("time", Some("t"), "header of the time column"),
+            param("extrapolation", Some("hold"), "hold | linear | zero"),
+            SAMPLE_TIME_CONTINUOUS,
+        ],
+        build: build_from_csv,
+    },
+];
+
+/// Piecewise-linear interpolation over sorted breakpoints.
+#[derive(Clone, Debug)]
+pub struct Table {
+    x: Vec<f64>,
+    y: Vec<f64>,
+    outside: Outside,
+}
+
+/// What a table gives outside its breakpoints.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Outside {
+    Clamp,
+    Linear,
+    Zero,
+}
+
+impl Table {
+    /// `x` non-decreasing with at least two points, `y` the same length.
+    pub fn new(x: Vec<f64>, y: Vec<f64>, outside: Outside) -> Result<Table, String> {
+        if x.len() < 2 || x.len() != y.len() {
+            return Err(format!(
+                "needs at least two points and as many values as breakpoints ({} vs {})",
+                x.len(),
+                y.len()
+            ));
+        }
+        if let Some(i) = x.windows(2).position(|w| w[1] < w[0] || !w[0].is_finite()) {
+            return Err(format!(
+                "breakpoints must increase: {} then {}",
+                x[i],
+                x[i + 1]
+            ));
+        }
+        if x[0] == x[x.len() - 1] {
+            return Err("breakpoints span no interval".into());
+        }
+        Ok(Table { x, y, outside })
+    }
+
+    /// The interpolated value at `u` (binary search; no allocation).
+    pub fn eval(&self, u: f64) -> f64 {
+        let (x, y, n) = (&self.x, &self.y, self.x.len());
+        if u < x[0] || u > x[n - 1] {
+            match self.outside {
+                Outside::Zero => return 0.0,
+                Outside::Clamp => return if u < x[0] { y[0] } else { y[n - 1] },
+                Outside::Linear => {}
+            }
+        }
+        // Segment i: x[i] <= u < x[i+1], limited to the first/last segment.
+        let i = x.partition_point(|&v| v <= u).clamp(1, n - 1) - 1;
+        let (x0, x1) = (x[i], x[i + 1]);
+        if x1 == x0 {
+            return y[i + 1];
+        }
+        y[i] + (y[i + 1] - y[i]) * (u - x0) / (x1 - x0)
+    }
+}
+
+struct Lookup(Table);
+
+impl Block for Lookup {
+    fn output(&mut self, io: &mut Io) {
+        for k in 0..io.output_width(0) {
+            let v = self.0.eval(io.u_at(0, k));
+            io.set_at(0, k, v);
+        }
+    }
+}
+
+fn build_lookup(p: &mut Params) -> Result<Built, Diagnostic> {
+    let x = p.vector("x")?;
+    if let Some(i) = x.windows(2).position(|w| w[1] <= w[0]) {
+        return Err(p.error(
+            "x",
+            format!(
+                "breakpoints must be strictly increasing: {} then {}",
+                x[i],
+                x[i + 1]
+            ),
+        ));
+    }
+    let y = p.vector("y")?;
+    let outside = match p.choice("extrapolation", &["clamp", "linear"])? {
+        "linear" => Outside::Linear,
+        _ => Outside::Clamp,
+    };
+    let table = Table::new(x, y, outside).map_err(|m| p.error("y", m))?;
+    let st = p.sample_time(SampleTime::Inherited)?;
+    let iface = Interface::new(st)
+        .input("u", Width::Common, true)
+        .output("y", Width::Common);
+    Ok(Built::new(Lookup(table), iface))
+}
+
+struct Series(Table);
+
+impl Block for Series {
+    fn output(&mut self, io: &mut Io) {
+        let v = self.0.eval(io.t);
+        io.set(0, v);
+    }
+}
+
+fn build_from_csv(p: &mut Params) -> Result<Built, Diagnostic> {
+    let path = p.path("file")?;
+    let column = p.string("column")?;
+    let time = p.opt_string("time")?.unwrap_or("t");
+    let outside = match p.choice("extrapolation", &["hold", "linear", "zero"])? {
+        "linear" => Outside::Linear,
+        "zero" => Outside::Zero,
+        _ => Outside::Clamp,
+    };
+    let (ts, ys) = read_columns(&path, time, column).map_err(|m| p.error("file", m))?;
+    let table = Table::new(ts, ys, outside)
+        .map_err(|m| p.error("file", format!("`{}`: {m}", path.display())))?;
+    let st = p.sample_time(SampleTime::Continuous)?;
+    Ok(Built::new(
+        Series(table),
+        Interface::new(st).output("y", Width::Fixed(1)),
+    ))
+}
+
+/// Reads two columns by header name; errors name the file, row and column.
+fn read_columns(
+    path: &std::path::Path,
+    time: &str,
+    column: &str,
+) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let shown = path.display();
+    let mut reader =
+        csv::Reader::from_path(path).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
+    let headers = reader
+        .headers()
+        .map_err(|e| format!("`{shown}`: {e}"))?
+        .clone();
+    let find = |name: &str| {
+        headers
+            .iter()
+            .position(|h| h.trim() == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = headers.iter().collect();
+                format!(
+                    "`{shown}` has no column `{name}` (columns: {})",
+                    names.join(", ")
+                )
+            })
+    };
+    let (ti, yi) = (find(time)?, find(column)?);
+    let (mut ts, mut ys) = (Vec::new(), Vec::new());
+    for (row, record) in reader.records().enumerate() {
+        let record = record.map_err(|e| format!("`{shown}`: {e}"))?;
+        let num = |i: usize, name: &str| -> Result<f64, String> {
+            let cell = record.get(i).unwrap_or("").trim();
+            cell.parse::<f64>().map_err(|_| {
+                format!(
+                    "`{shown}` row {}: `{name}` is `{cell}`, not a number",
+                    row + 2
+                )
+            })
+        };
+        ts.push(num(ti, time)?);
+        ys.push(num(yi, column)?);
+    }
+    Ok((ts, ys))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interpolation_and_extrapolation() {
+        let t = Table::new(vec![0.0, 1.0, 3.0], vec![0.0, 2.0, 0.0], Outside::Clamp).unwrap();
+        assert_eq!(
+            [
+                t.eval(-1.0),
+                t.eval(0.5),
+                t.eval(1.0),
+                t.eval(2.0),
+                t.eval(4.0)
+            ],
+            [0.0, 1.0, 2.0, 1.0, 0.0]
+        );
+        let l = Table {
+            outside: Outside::Linear,
+            ..t.clone()
+        };
+        assert_eq!([l.eval(-1.0), l.eval(4.0)], [-2.0, -1.0]);
+        let z = Table {
+            outside: Outside::Zero,
+            ..t
+        };
+        assert_eq!([z.eval(-0.1), z.eval(3.0), z.eval(3.1)], [0.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn a_repeated_time_is_a_jump() {
+        let t = Table::new(
+            vec![0.0, 1.0, 1.0, 2.0],
+            vec![0.0, 0.0, 5.0, 5.0],
+            Outside::Clamp,
+        )
+        .unwrap();
+        assert_eq!([t.eval(0.999), t.eval(1.0), t.eval(1.5)], [0.0, 5.0, 5.0]);
+        assert!(Table::new(vec![1.0, 0.0], vec![0.0, 0.0], Outside::Clamp).is_err());
+    }
+}

@@ -1,0 +1,189 @@
+//! Recording: picking the recorded columns out of the signal buffer at
+//! major steps (with decimation), keeping them in memory, or streaming them
+//! to a CSV file that appears whole or not at all.
+
+use ctlgraph_core::Model;
+use ctlgraph_core::compile::Column;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Turns signal buffers into rows `[t, col1, col2, …]`, every `every`-th
+/// major step plus the last one. Allocates only in `new`.
+pub struct Recorder {
+    columns: Vec<Column>,
+    every: usize,
+    count: usize,
+    row: Vec<f64>,
+    row_written: bool,
+}
+
+impl Recorder {
+    pub fn new(model: &Model) -> Self {
+        let width: usize = model.columns.iter().map(|c| c.width).sum();
+        Recorder {
+            columns: model.columns.clone(),
+            every: model.record_every.max(1),
+            count: 0,
+            row: vec![0.0; 1 + width],
+            row_written: true,
+        }
+    }
+
+    /// Offers the signals of one major step; `out` receives the row when
+    /// this step is logged.
+    pub fn sample(&mut self, t: f64, signals: &[f64], out: &mut dyn FnMut(&[f64])) {
+        self.row[0] = t;
+        let mut k = 1;
+        for c in &self.columns {
+            self.row[k..k + c.width].copy_from_slice(&signals[c.offset..c.offset + c.width]);
+            k += c.width;
+        }
+        self.row_written = self.count.is_multiple_of(self.every);
+        if self.row_written {
+            out(&self.row);
+        }
+        self.count += 1;
+    }
+
+    /// Emits the last step if decimation skipped it, so every log ends at
+    /// the stop time.
+    pub fn flush(&mut self, out: &mut dyn FnMut(&[f64])) {
+        if !self.row_written {
+            out(&self.row);
+            self.row_written = true;
+        }
+    }
+}
+
+/// Recorded signals in memory, column-major.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Trace {
+    pub headers: Vec<String>,
+    pub columns: Vec<Vec<f64>>,
+}
+
+impl Trace {
+    pub fn new(headers: Vec<String>) -> Self {
+        let columns = vec![Vec::new(); headers.len()];
+        Trace { headers, columns }
+    }
+
+    pub fn push(&mut self, row: &[f64]) {
+        for (c, v) in self.columns.iter_mut().zip(row) {
+            c.push(*v);
+        }
+    }
+
+    /// Time stamps.
+    pub fn t(&self) -> &[f64] {
+        &self.columns[0]
+    }
+
+    /// A column by header name.
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        self.headers
+            .iter()
+            .position(|h| h == name)
+            .map(|i| self.columns[i].as_slice())
+    }
+
+    /// Linear interpolation of column `name` at time `t`.
+    pub fn at(&self, name: &str, t: f64) -> Option<f64> {
+        let (ts, ys) = (self.t(), self.column(name)?);
+        let i = ts.partition_point(|&x| x <= t);
+        Some(match i {
+            0 => ys[0],
+            i if i >= ts.len() => ys[ts.len() - 1],
+            i if ts[i] == ts[i - 1] => ys[i],
+            i => ys[i - 1] + (ys[i] - ys[i - 1]) * (t - ts[i - 1]) / (ts[i] - ts[i - 1]),
+        })
+    }
+}
+
+/// A CSV file written to a temporary name beside its destination and
+/// renamed into place by [`CsvFile::commit`]; dropped uncommitted, it
+/// leaves nothing behind.
+pub struct CsvFile {
+    dest: PathBuf,
+    tmp: PathBuf,
+    writer: Option<BufWriter<File>>,
+    error: Option<std::io::Error>,
+}
+
+impl CsvFile {
+    pub fn create(dest: &Path, headers: &[String]) -> std::io::Result<Self> {
+        let name = dest
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let tmp = dest.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+        let mut writer = BufWriter::with_capacity(1 << 16, File::create(&tmp)?);
+        let header: Vec<String> = headers.iter().map(|h| quote(h)).collect();
+        writeln!(writer, "{}", header.join(","))?;
+        Ok(CsvFile {
+            dest: dest.to_path_buf(),
+            tmp,
+            writer: Some(writer),
+            error: None,
+        })
+    }
+
+    /// Appends a row. Rust's `Display` for f64 is the shortest text that
+    /// reads back to the same number, so values survive the round trip.
+    pub fn write_row(&mut self, row: &[f64]) {
+        let (Some(w), None) = (self.writer.as_mut(), &self.error) else {
+            return;
+        };
+        let mut result = Ok(());
+        for (i, v) in row.iter().enumerate() {
+            let sep = if i == 0 { "" } else { "," };
+            result = result.and_then(|_| write!(w, "{sep}{v}"));
+        }
+        if let Err(e) = result.and_then(|_| w.write_all(b"\n")) {
+            self.error = Some(e);
+        }
+    }
+
+    /// Flushes and renames into place.
+    pub fn commit(mut self) -> std::io::Result<()> {
+        if let Some(e) = self.error.take() {
+            return Err(e);
+        }
+        if let Some(w) = self.writer.take() {
+            w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        }
+        std::fs::rename(&self.tmp, &self.dest)
+    }
+}
+
+impl Drop for CsvFile {
+    fn drop(&mut self) {
+        // After a successful commit the temporary name no longer exists.
+        self.writer.take();
+        let _ = std::fs::remove_file(&self.tmp);
+    }
+}
+
+/// Quotes a header cell if CSV needs it.
+fn quote(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// Writes a whole file atomically (temporary name, then rename).
+pub fn write_atomic(dest: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let name = dest
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = dest.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    let result = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, dest));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}

@@ -1,0 +1,76 @@
+//! The machine-readable run report (`--report FILE.json`).
+
+use ctlgraph_core::RunStats;
+use ctlgraph_solver::Method;
+use serde_json::{Value, json};
+use sha2::{Digest, Sha256};
+
+/// What a report says about one run.
+pub struct RunInfo<'a> {
+    pub graph: &'a str,
+    pub graph_bytes: &'a [u8],
+    pub method: Method,
+    pub stats: RunStats,
+    pub seed: u64,
+    pub stop: f64,
+    pub simulated: f64,
+    pub wall_seconds: f64,
+    pub error: Option<String>,
+}
+
+/// SHA-256 of the graph file, lowercase hex.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+fn solver_json(method: Method) -> Value {
+    match method {
+        Method::Euler { step } | Method::Heun { step } | Method::Rk4 { step } => {
+            json!({ "method": method.name(), "step": step })
+        }
+        Method::DormandPrince {
+            rtol,
+            atol,
+            max_step,
+            initial_step,
+        } => json!({
+            "method": method.name(), "rtol": rtol, "atol": atol, "max_step": max_step,
+            "initial_step": initial_step,
+        }),
+    }
+}
+
+pub fn to_json(info: &RunInfo) -> Value {
+    let s = info.stats;
+    json!({
+        "ctlgraph_version": env!("CARGO_PKG_VERSION"),
+        "graph": { "file": info.graph, "sha256": sha256_hex(info.graph_bytes) },
+        "solver": solver_json(info.method),
+        "statistics": {
+            "major_steps": s.major_steps,
+            "solver_steps": s.solver.steps,
+            "rejected_steps": s.solver.rejected,
+            "derivative_evaluations": s.solver.evaluations,
+        },
+        "seed": info.seed,
+        "stop_time": info.stop,
+        "simulated_time": info.simulated,
+        "wall_time_seconds": info.wall_seconds,
+        "status": if info.error.is_some() { "failed" } else { "ok" },
+        "error": info.error,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn sha256_of_abc() {
+        assert_eq!(
+            super::sha256_hex(b"abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+    }
+}
