@@ -47,18 +47,9 @@ pub fn to_dot(model: &Model) -> String {
     }
     for e in &model.edges {
         let (src, dst) = (&model.meta[e.src], &model.meta[e.dst]);
-        let label = format!(
-            "{} → {}",
-            src.output_names[e.src_port], dst.input_names[e.dst_port]
-        );
+        let label = format!("{} → {}", src.output_names[e.src_port], dst.input_names[e.dst_port]);
         let style = if e.feedthrough { "" } else { ", style=dashed" };
-        let _ = writeln!(
-            s,
-            "  b{} -> b{} [label=\"{}\"{style}];",
-            e.src,
-            e.dst,
-            escape(&label)
-        );
+        let _ = writeln!(s, "  b{} -> b{} [label=\"{}\"{style}];", e.src, e.dst, escape(&label));
     }
     s.push_str("}\n");
     s

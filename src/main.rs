@@ -90,9 +90,7 @@ fn main() -> ExitCode {
             report.as_deref(),
         ),
         Command::Check { graph, sets } => check(&graph, &sets),
-        Command::Dot { graph, sets } => {
-            compile(&graph, &sets).map(|m| print!("{}", ctlgraph::dot::to_dot(&m)))
-        }
+        Command::Dot { graph, sets } => compile(&graph, &sets).map(|m| print!("{}", ctlgraph::dot::to_dot(&m))),
         Command::Blocks { r#type } => blocks(r#type.as_deref()),
     };
     match result {
@@ -109,10 +107,7 @@ fn main() -> ExitCode {
 }
 
 fn compile(graph: &Path, sets: &[String]) -> Result<Model, Failure> {
-    let sets = sets
-        .iter()
-        .map(|s| parse_set(s))
-        .collect::<Result<Vec<_>, _>>()?;
+    let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
     Ok(ctlgraph::compile_file(graph, &sets)?)
 }
 
@@ -163,10 +158,7 @@ fn blocks(ty: Option<&str>) -> Result<(), Failure> {
             .suggest(name, reg.names())
             .into());
     };
-    println!(
-        "{} ({})\n\n{}\n\n{}\n",
-        t.name, t.category, t.summary, t.doc
-    );
+    println!("{} ({})\n\n{}\n\n{}\n", t.name, t.category, t.summary, t.doc);
     for (title, ports) in [("inputs", t.inputs), ("outputs", t.outputs)] {
         println!("{title}:");
         if ports.is_empty() {
@@ -181,9 +173,7 @@ fn blocks(ty: Option<&str>) -> Result<(), Failure> {
         println!("  (none)");
     }
     for p in t.params {
-        let default = p
-            .default
-            .map_or("required".to_string(), |d| format!("default {d}"));
+        let default = p.default.map_or("required".to_string(), |d| format!("default {d}"));
         println!("  {:<14} {:<18} {}", p.name, default, p.doc);
     }
     Ok(())
@@ -215,10 +205,8 @@ impl Progress {
         if self.bar.is_none() && self.start.elapsed() > Duration::from_secs(2) {
             let bar = indicatif::ProgressBar::new(1000);
             bar.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "{bar:40} {percent:>3}% t = {msg} s, eta {eta}",
-                )
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+                indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% t = {msg} s, eta {eta}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
             );
             self.bar = Some(bar);
         }
@@ -244,9 +232,7 @@ fn run(
     report: Option<&Path>,
 ) -> Result<(), Failure> {
     if let Some(t) = stop_time.filter(|t| !(*t > 0.0 && t.is_finite())) {
-        return Err(
-            Diagnostic::plain(format!("--stop-time {t}: must be a positive number")).into(),
-        );
+        return Err(Diagnostic::plain(format!("--stop-time {t}: must be a positive number")).into());
     }
     let model = compile(graph, sets)?;
     let seed = model.sim.seed;
@@ -305,11 +291,7 @@ fn run(
             .map_err(|e| Failure::Run(format!("cannot write {}: {e}", path.display())))?;
     }
     if let (Some(tr), Some(path)) = (trace, plot) {
-        let title = sim
-            .model()
-            .name
-            .clone()
-            .unwrap_or_else(|| graph.display().to_string());
+        let title = sim.model().name.clone().unwrap_or_else(|| graph.display().to_string());
         let svg = ctlgraph::plot::render_svg(&tr, &title).map_err(Failure::Run)?;
         write_atomic(path, svg.as_bytes())
             .map_err(|e| Failure::Run(format!("cannot write {}: {e}", path.display())))?;

@@ -22,9 +22,7 @@ pub fn render_svg(trace: &Trace, title: &str) -> Result<String, String> {
     {
         let root = SVGBackend::with_string(&mut svg, (WIDTH, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let root = root
-            .titled(title, ("sans-serif", 22))
-            .map_err(|e| e.to_string())?;
+        let root = root.titled(title, ("sans-serif", 22)).map_err(|e| e.to_string())?;
         let panels = root.split_evenly((groups.len(), 1));
         let t = trace.t();
         let (t0, t1) = (t[0], *t.last().unwrap_or(&t[0]));
@@ -51,9 +49,7 @@ pub fn render_svg(trace: &Trace, title: &str) -> Result<String, String> {
                     .draw_series(LineSeries::new(points, color.stroke_width(2)))
                     .map_err(|e| e.to_string())?
                     .label(trace.headers[c].as_str())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                    });
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
             }
             chart
                 .configure_series_labels()
@@ -86,9 +82,7 @@ fn y_range(trace: &Trace, cols: &[usize]) -> (f64, f64) {
         .iter()
         .flat_map(|&c| trace.columns[c].iter().copied())
         .filter(|v| v.is_finite());
-    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-        (lo.min(v), hi.max(v))
-    });
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
     if !lo.is_finite() {
         return (-1.0, 1.0);
     }
@@ -118,11 +112,7 @@ fn reduce(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
                 imax = i;
             }
         }
-        let (a, b) = if imin <= imax {
-            (imin, imax)
-        } else {
-            (imax, imin)
-        };
+        let (a, b) = if imin <= imax { (imin, imax) } else { (imax, imin) };
         out.push((t[a], y[a]));
         if b != a {
             out.push((t[b], y[b]));

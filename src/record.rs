@@ -129,16 +129,24 @@ impl CsvFile {
         })
     }
 
-    /// Appends a row. Rust's `Display` for f64 is the shortest text that
-    /// reads back to the same number, so values survive the round trip.
+    /// Appends a row. Rust's `Display` and `LowerExp` for f64 print the
+    /// shortest text that reads back to the same number, so values survive
+    /// the round trip; very small or large magnitudes use the exponent form.
     pub fn write_row(&mut self, row: &[f64]) {
         let (Some(w), None) = (self.writer.as_mut(), &self.error) else {
             return;
         };
         let mut result = Ok(());
-        for (i, v) in row.iter().enumerate() {
+        for (i, &v) in row.iter().enumerate() {
             let sep = if i == 0 { "" } else { "," };
-            result = result.and_then(|_| write!(w, "{sep}{v}"));
+            let plain = v == 0.0 || (1e-4..1e15).contains(&v.abs()) || !v.is_finite();
+            result = result.and_then(|_| {
+                if plain {
+                    write!(w, "{sep}{v}")
+                } else {
+                    write!(w, "{sep}{v:e}")
+                }
+            });
         }
         if let Err(e) = result.and_then(|_| w.write_all(b"\n")) {
             self.error = Some(e);

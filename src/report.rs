@@ -20,10 +20,7 @@ pub struct RunInfo<'a> {
 
 /// SHA-256 of the graph file, lowercase hex.
 pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+    Sha256::digest(bytes).iter().map(|b| format!("{b:02x}")).collect()
 }
 
 fn solver_json(method: Method) -> Value {

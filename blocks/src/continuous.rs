@@ -73,16 +73,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: SISO_IN,
         outputs: SISO_OUT,
         params: &[
-            param(
-                "num",
-                None,
-                "numerator coefficients, descending powers of s",
-            ),
-            param(
-                "den",
-                None,
-                "denominator coefficients, descending powers of s",
-            ),
+            param("num", None, "numerator coefficients, descending powers of s"),
+            param("den", None, "denominator coefficients, descending powers of s"),
         ],
         build: build_tf,
     },
@@ -95,11 +87,7 @@ pub const TYPES: &[BlockType] = &[
         inputs: SISO_IN,
         outputs: SISO_OUT,
         params: &[
-            param(
-                "zeros",
-                Some("[]"),
-                "list of zeros: numbers or [re, im] pairs",
-            ),
+            param("zeros", Some("[]"), "list of zeros: numbers or [re, im] pairs"),
             param("poles", None, "list of poles: numbers or [re, im] pairs"),
             param("gain", Some("1"), "k"),
         ],
@@ -135,9 +123,7 @@ pub(crate) fn initial_vector(v: &[f64], n: usize) -> Result<Vec<f64>, String> {
     match v.len() {
         1 => Ok(vec![v[0]; n]),
         len if len == n => Ok(v.to_vec()),
-        len => Err(format!(
-            "`initial` has {len} values but the block has {n} states"
-        )),
+        len => Err(format!("`initial` has {len} values but the block has {n} states")),
     }
 }
 
@@ -184,8 +170,7 @@ impl Block for Integrator {
 
 fn build_integrator(p: &mut Params) -> Result<Built, Diagnostic> {
     let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
-    let (lower, upper) =
-        crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
+    let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
     if let Some(v) = initial.iter().find(|v| !(lower..=upper).contains(*v)) {
         return Err(p.error("initial", format!("{v} is outside [{lower}, {upper}]")));
     }
@@ -312,9 +297,7 @@ pub(crate) fn lti_error(p: &Params, e: LtiError) -> Diagnostic {
     };
     let d = p.error(key, &e);
     match e {
-        LtiError::Improper { .. } => {
-            d.with_hint("a physical system needs at least as many poles as zeros")
-        }
+        LtiError::Improper { .. } => d.with_hint("a physical system needs at least as many poles as zeros"),
         _ => d,
     }
 }
@@ -327,11 +310,7 @@ fn build_tf(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 fn build_zpk(p: &mut Params) -> Result<Built, Diagnostic> {
-    let to_c = |v: Vec<(f64, f64)>| {
-        v.into_iter()
-            .map(|(re, im)| Complex::new(re, im))
-            .collect::<Vec<_>>()
-    };
+    let to_c = |v: Vec<(f64, f64)>| v.into_iter().map(|(re, im)| Complex::new(re, im)).collect::<Vec<_>>();
     let zeros = to_c(p.roots("zeros")?);
     if !p.has("poles") {
         return Err(p.block_error("missing parameter `poles`"));

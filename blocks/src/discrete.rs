@@ -141,13 +141,7 @@ fn build_unit_delay(p: &mut Params) -> Result<Built, Diagnostic> {
     let iface = Interface::new(st)
         .input("u", Width::Common, false)
         .output("y", Width::Common);
-    Ok(Built::new(
-        UnitDelay {
-            initial,
-            x: Vec::new(),
-        },
-        iface,
-    ))
+    Ok(Built::new(UnitDelay { initial, x: Vec::new() }, iface))
 }
 
 struct Hold;

@@ -35,11 +35,7 @@ pub fn registry() -> Registry {
 }
 
 /// Shorthand for parameter documentation tables.
-pub(crate) const fn param(
-    name: &'static str,
-    default: Option<&'static str>,
-    doc: &'static str,
-) -> ParamDoc {
+pub(crate) const fn param(name: &'static str, default: Option<&'static str>, doc: &'static str) -> ParamDoc {
     ParamDoc { name, default, doc }
 }
 
@@ -72,17 +68,9 @@ mod tests {
     fn every_type_is_documented() {
         let reg = registry();
         for ty in reg.types() {
-            assert!(
-                !ty.summary.is_empty() && !ty.doc.is_empty(),
-                "{} lacks docs",
-                ty.name
-            );
+            assert!(!ty.summary.is_empty() && !ty.doc.is_empty(), "{} lacks docs", ty.name);
             assert!(!ty.category.is_empty(), "{} lacks a category", ty.name);
         }
-        assert!(
-            reg.types().count() >= 40,
-            "only {} types",
-            reg.types().count()
-        );
+        assert!(reg.types().count() >= 40, "only {} types", reg.types().count());
     }
 }

@@ -36,11 +36,7 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
-            param(
-                "k",
-                Some("1"),
-                "number, list (elementwise) or list of rows (matrix)",
-            ),
+            param("k", Some("1"), "number, list (elementwise) or list of rows (matrix)"),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_gain,
@@ -67,10 +63,7 @@ pub const TYPES: &[BlockType] = &[
               Division by zero gives ±inf, which stops the run naming this block.",
         inputs: UN,
         outputs: Y_ELEMENTWISE,
-        params: &[
-            param("ops", Some("**"), "one * or / per input"),
-            SAMPLE_TIME_INHERITED,
-        ],
+        params: &[param("ops", Some("**"), "one * or / per input"), SAMPLE_TIME_INHERITED],
         build: build_product,
     },
     BlockType {
@@ -231,10 +224,9 @@ impl Block for Gain {
                 *k = vec![v; width];
                 Ok(())
             }
-            Gain::Elementwise(k) if k.len() != width => Err(format!(
-                "`k` has {} elements but the signal has width {width}",
-                k.len()
-            )),
+            Gain::Elementwise(k) if k.len() != width => {
+                Err(format!("`k` has {} elements but the signal has width {width}", k.len()))
+            }
             _ => Ok(()),
         }
     }
@@ -269,13 +261,7 @@ fn build_gain(p: &mut Params) -> Result<Built, Diagnostic> {
         let iface = Interface::new(st)
             .input("u", Width::Fixed(cols), true)
             .output("y", Width::Fixed(rows.len()));
-        return Ok(Built::new(
-            Gain::Matrix {
-                k: rows.concat(),
-                cols,
-            },
-            iface,
-        ));
+        return Ok(Built::new(Gain::Matrix { k: rows.concat(), cols }, iface));
     }
     let k = p.opt_vector("k")?.unwrap_or_else(|| vec![1.0]);
     if k.is_empty() {
@@ -300,12 +286,7 @@ impl Block for Sum {
             return;
         }
         for k in 0..io.output_width(0) {
-            let v: f64 = self
-                .signs
-                .iter()
-                .enumerate()
-                .map(|(i, s)| s * io.u_at(i, k))
-                .sum();
+            let v: f64 = self.signs.iter().enumerate().map(|(i, s)| s * io.u_at(i, k)).sum();
             io.set_at(0, k, v);
         }
     }
@@ -449,10 +430,7 @@ fn build_fcn(p: &mut Params) -> Result<Built, Diagnostic> {
         Kind::Str(s) => (s.clone(), src.pos.clone()),
         Kind::Num(v) => (v.to_string(), src.pos.clone()),
         _ => {
-            return Err(p.error(
-                "expr",
-                format!("expected a formula, found {}", src.describe()),
-            ));
+            return Err(p.error("expr", format!("expected a formula, found {}", src.describe())));
         }
     };
     let names = port_names(n);

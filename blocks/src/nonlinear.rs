@@ -53,11 +53,7 @@ pub const TYPES: &[BlockType] = &[
         inputs: U,
         outputs: Y,
         params: &[
-            param(
-                "rising",
-                Some("1"),
-                "largest rate of increase [units/s], > 0",
-            ),
+            param("rising", Some("1"), "largest rate of increase [units/s], > 0"),
             param("falling", Some("-1"), "most negative rate [units/s], < 0"),
             param("initial", Some("0"), "output at t = 0"),
             param("sample_time", Some("0"), "0 continuous, T > 0 discrete"),
@@ -89,12 +85,7 @@ impl Block for Saturation {
 }
 
 /// Reads `lower`/`upper`-style limit pairs, checking their order.
-pub(crate) fn limits(
-    p: &mut Params,
-    lo: &str,
-    hi: &str,
-    defaults: (f64, f64),
-) -> Result<(f64, f64), Diagnostic> {
+pub(crate) fn limits(p: &mut Params, lo: &str, hi: &str, defaults: (f64, f64)) -> Result<(f64, f64), Diagnostic> {
     let (lower, upper) = (p.number_or(lo, defaults.0)?, p.number_or(hi, defaults.1)?);
     if lower > upper || lower.is_nan() || upper.is_nan() {
         return Err(p.error(hi, format!("`{hi}` ({upper}) must be >= `{lo}` ({lower})")));
@@ -199,8 +190,5 @@ fn build_rate_limiter(p: &mut Params) -> Result<Built, Diagnostic> {
     let iface = Interface::new(st)
         .input("u", Width::Common, true)
         .output("y", Width::Common);
-    Ok(Built::new(
-        RateLimiter::new(rising, falling, initial),
-        iface,
-    ))
+    Ok(Built::new(RateLimiter::new(rising, falling, initial), iface))
 }

@@ -42,11 +42,7 @@ pub const TYPES: &[BlockType] = &[BlockType {
         param("n", Some("100"), "derivative filter coefficient N [rad/s]"),
         param("lower", Some("-inf"), "lower output limit"),
         param("upper", Some("inf"), "upper output limit"),
-        param(
-            "anti_windup",
-            Some("clamping"),
-            "clamping | back_calculation | none",
-        ),
+        param("anti_windup", Some("clamping"), "clamping | back_calculation | none"),
         param("kb", Some("1"), "back-calculation gain [1/s]"),
         param("initial", Some("0"), "initial integrator output I(0)"),
         param(
@@ -184,8 +180,7 @@ fn build_pid(p: &mut Params) -> Result<Built, Diagnostic> {
         |v| v > 0.0 && v.is_finite(),
         "a positive filter coefficient",
     )?;
-    let (lower, upper) =
-        crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
+    let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
     let kb = p.number_or("kb", 1.0)?;
     let anti_windup = match p.choice("anti_windup", &["clamping", "back_calculation", "none"])? {
         "back_calculation" => AntiWindup::BackCalculation { kb },
@@ -198,10 +193,7 @@ fn build_pid(p: &mut Params) -> Result<Built, Diagnostic> {
     for name in p.strings("gain_inputs")? {
         let Some(i) = ["kp", "ki", "kd"].iter().position(|g| *g == name) else {
             return Err(p
-                .error(
-                    "gain_inputs",
-                    format!("`{name}` is not a gain: use kp, ki, kd"),
-                )
+                .error("gain_inputs", format!("`{name}` is not a gain: use kp, ki, kd"))
                 .suggest(name, ["kp", "ki", "kd"]));
         };
         if gain_ports[i].is_some() {

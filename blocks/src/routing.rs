@@ -68,10 +68,7 @@ pub const TYPES: &[BlockType] = &[
             name: "y",
             doc: "width = number of indices",
         }],
-        params: &[
-            param("indices", None, "list of 1-based indices"),
-            SAMPLE_TIME_INHERITED,
-        ],
+        params: &[param("indices", None, "list of 1-based indices"), SAMPLE_TIME_INHERITED],
         build: build_selector,
     },
     BlockType {
@@ -123,11 +120,7 @@ pub const TYPES: &[BlockType] = &[
         }],
         params: &[
             param("file", None, "graph file, relative to this one"),
-            param(
-                "parameters",
-                Some("{}"),
-                "overrides of the subsystem's parameters",
-            ),
+            param("parameters", Some("{}"), "overrides of the subsystem's parameters"),
         ],
         build: structural,
     },
@@ -197,10 +190,7 @@ fn build_mux(p: &mut Params) -> Result<Built, Diagnostic> {
     for (i, w) in ws.iter().enumerate() {
         iface = iface.input(&format!("u{}", i + 1), Width::Fixed(*w), true);
     }
-    Ok(Built::new(
-        Concat,
-        iface.output("y", Width::Fixed(ws.iter().sum())),
-    ))
+    Ok(Built::new(Concat, iface.output("y", Width::Fixed(ws.iter().sum()))))
 }
 
 struct Split(Vec<usize>);
@@ -220,11 +210,8 @@ impl Block for Split {
 
 fn build_demux(p: &mut Params) -> Result<Built, Diagnostic> {
     let ws = widths(p, "outputs")?;
-    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).input(
-        "u",
-        Width::Fixed(ws.iter().sum()),
-        true,
-    );
+    let mut iface =
+        Interface::new(p.sample_time(SampleTime::Inherited)?).input("u", Width::Fixed(ws.iter().sum()), true);
     for (i, w) in ws.iter().enumerate() {
         iface = iface.output(&format!("y{}", i + 1), Width::Fixed(*w));
     }
@@ -236,10 +223,7 @@ struct Selector(Vec<usize>);
 impl Block for Selector {
     fn set_width(&mut self, width: usize) -> Result<(), String> {
         match self.0.iter().find(|&&i| i >= width) {
-            Some(i) => Err(format!(
-                "index {} is beyond the input's width {width}",
-                i + 1
-            )),
+            Some(i) => Err(format!("index {} is beyond the input's width {width}", i + 1)),
             None => Ok(()),
         }
     }
@@ -254,10 +238,7 @@ impl Block for Selector {
 fn build_selector(p: &mut Params) -> Result<Built, Diagnostic> {
     let idx = p.vector("indices")?;
     if idx.is_empty() || idx.iter().any(|i| *i < 1.0 || i.fract() != 0.0) {
-        return Err(p.error(
-            "indices",
-            "must be whole numbers >= 1 (indices count from 1)",
-        ));
+        return Err(p.error("indices", "must be whole numbers >= 1 (indices count from 1)"));
     }
     let idx: Vec<usize> = idx.iter().map(|i| *i as usize - 1).collect();
     let n = idx.len();
@@ -307,11 +288,5 @@ fn build_switch(p: &mut Params) -> Result<Built, Diagnostic> {
         .input("control", Width::Fixed(1), true)
         .input("u2", Width::Common, true)
         .output("y", Width::Common);
-    Ok(Built::new(
-        Switch {
-            threshold,
-            criterion,
-        },
-        iface,
-    ))
+    Ok(Built::new(Switch { threshold, criterion }, iface))
 }

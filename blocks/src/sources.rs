@@ -126,11 +126,7 @@ impl<F: Fn(&Io) -> f64 + Send> Block for TimeFn<F> {
     }
 
     fn next_event(&self, t: f64) -> f64 {
-        self.events
-            .iter()
-            .copied()
-            .find(|&e| e > t)
-            .unwrap_or(f64::INFINITY)
+        self.events.iter().copied().find(|&e| e > t).unwrap_or(f64::INFINITY)
     }
 }
 
@@ -164,11 +160,7 @@ fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
 fn build_step(p: &mut Params) -> Result<Built, Diagnostic> {
     let at = p.number_or("at", 0.0)?;
     let (initial, value) = (p.number_or("initial", 0.0)?, p.number_or("value", 1.0)?);
-    scalar_source(
-        p,
-        vec![at],
-        move |io| if io.reached(at) { value } else { initial },
-    )
+    scalar_source(p, vec![at], move |io| if io.reached(at) { value } else { initial })
 }
 
 fn build_ramp(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -190,9 +182,7 @@ fn build_sine(p: &mut Params) -> Result<Built, Diagnostic> {
     let amplitude = p.number_or("amplitude", 1.0)?;
     let w = 2.0 * std::f64::consts::PI * p.number_or("frequency", 1.0)?;
     let (phase, bias) = (p.number_or("phase", 0.0)?, p.number_or("bias", 0.0)?);
-    scalar_source(p, Vec::new(), move |io| {
-        bias + amplitude * (w * io.t + phase).sin()
-    })
+    scalar_source(p, Vec::new(), move |io| bias + amplitude * (w * io.t + phase).sin())
 }
 
 fn build_clock(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -201,18 +191,8 @@ fn build_clock(p: &mut Params) -> Result<Built, Diagnostic> {
 
 fn build_pulse(p: &mut Params) -> Result<Built, Diagnostic> {
     let amplitude = p.number_or("amplitude", 1.0)?;
-    let period = p.number_where(
-        "period",
-        Some(1.0),
-        |v| v > 0.0 && v.is_finite(),
-        "a positive number",
-    )?;
-    let duty = p.number_where(
-        "duty",
-        Some(0.5),
-        |v| v > 0.0 && v < 1.0,
-        "strictly between 0 and 1",
-    )?;
+    let period = p.number_where("period", Some(1.0), |v| v > 0.0 && v.is_finite(), "a positive number")?;
+    let duty = p.number_where("duty", Some(0.5), |v| v > 0.0 && v < 1.0, "strictly between 0 and 1")?;
     let delay = p.number_or("delay", 0.0)?;
     let st = p.sample_time(SampleTime::Continuous)?;
     let pulse = Pulse {
@@ -221,10 +201,7 @@ fn build_pulse(p: &mut Params) -> Result<Built, Diagnostic> {
         high: duty * period,
         delay,
     };
-    Ok(Built::new(
-        pulse,
-        Interface::new(st).output("y", Width::Fixed(1)),
-    ))
+    Ok(Built::new(pulse, Interface::new(st).output("y", Width::Fixed(1))))
 }
 
 /// Edges are computed as `delay + k·period` (and `+ high`), the same

@@ -78,11 +78,7 @@ impl Table {
             ));
         }
         if let Some(i) = x.windows(2).position(|w| w[1] < w[0] || !w[0].is_finite()) {
-            return Err(format!(
-                "breakpoints must increase: {} then {}",
-                x[i],
-                x[i + 1]
-            ));
+            return Err(format!("breakpoints must increase: {} then {}", x[i], x[i + 1]));
         }
         if x[0] == x[x.len() - 1] {
             return Err("breakpoints span no interval".into());
@@ -126,11 +122,7 @@ fn build_lookup(p: &mut Params) -> Result<Built, Diagnostic> {
     if let Some(i) = x.windows(2).position(|w| w[1] <= w[0]) {
         return Err(p.error(
             "x",
-            format!(
-                "breakpoints must be strictly increasing: {} then {}",
-                x[i],
-                x[i + 1]
-            ),
+            format!("breakpoints must be strictly increasing: {} then {}", x[i], x[i + 1]),
         ));
     }
     let y = p.vector("y")?;
@@ -165,8 +157,7 @@ fn build_from_csv(p: &mut Params) -> Result<Built, Diagnostic> {
         _ => Outside::Clamp,
     };
     let (ts, ys) = read_columns(&path, time, column).map_err(|m| p.error("file", m))?;
-    let table = Table::new(ts, ys, outside)
-        .map_err(|m| p.error("file", format!("`{}`: {m}", path.display())))?;
+    let table = Table::new(ts, ys, outside).map_err(|m| p.error("file", format!("`{}`: {m}", path.display())))?;
     let st = p.sample_time(SampleTime::Continuous)?;
     Ok(Built::new(
         Series(table),
@@ -175,29 +166,15 @@ fn build_from_csv(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// Reads two columns by header name; errors name the file, row and column.
-fn read_columns(
-    path: &std::path::Path,
-    time: &str,
-    column: &str,
-) -> Result<(Vec<f64>, Vec<f64>), String> {
+fn read_columns(path: &std::path::Path, time: &str, column: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
     let shown = path.display();
-    let mut reader =
-        csv::Reader::from_path(path).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
-    let headers = reader
-        .headers()
-        .map_err(|e| format!("`{shown}`: {e}"))?
-        .clone();
+    let mut reader = csv::Reader::from_path(path).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
+    let headers = reader.headers().map_err(|e| format!("`{shown}`: {e}"))?.clone();
     let find = |name: &str| {
-        headers
-            .iter()
-            .position(|h| h.trim() == name)
-            .ok_or_else(|| {
-                let names: Vec<&str> = headers.iter().collect();
-                format!(
-                    "`{shown}` has no column `{name}` (columns: {})",
-                    names.join(", ")
-                )
-            })
+        headers.iter().position(|h| h.trim() == name).ok_or_else(|| {
+            let names: Vec<&str> = headers.iter().collect();
+            format!("`{shown}` has no column `{name}` (columns: {})", names.join(", "))
+        })
     };
     let (ti, yi) = (find(time)?, find(column)?);
     let (mut ts, mut ys) = (Vec::new(), Vec::new());
@@ -205,12 +182,8 @@ fn read_columns(
         let record = record.map_err(|e| format!("`{shown}`: {e}"))?;
         let num = |i: usize, name: &str| -> Result<f64, String> {
             let cell = record.get(i).unwrap_or("").trim();
-            cell.parse::<f64>().map_err(|_| {
-                format!(
-                    "`{shown}` row {}: `{name}` is `{cell}`, not a number",
-                    row + 2
-                )
-            })
+            cell.parse::<f64>()
+                .map_err(|_| format!("`{shown}` row {}: `{name}` is `{cell}`, not a number", row + 2))
         };
         ts.push(num(ti, time)?);
         ys.push(num(yi, column)?);
@@ -226,13 +199,7 @@ mod tests {
     fn interpolation_and_extrapolation() {
         let t = Table::new(vec![0.0, 1.0, 3.0], vec![0.0, 2.0, 0.0], Outside::Clamp).unwrap();
         assert_eq!(
-            [
-                t.eval(-1.0),
-                t.eval(0.5),
-                t.eval(1.0),
-                t.eval(2.0),
-                t.eval(4.0)
-            ],
+            [t.eval(-1.0), t.eval(0.5), t.eval(1.0), t.eval(2.0), t.eval(4.0)],
             [0.0, 1.0, 2.0, 1.0, 0.0]
         );
         let l = Table {
@@ -249,12 +216,7 @@ mod tests {
 
     #[test]
     fn a_repeated_time_is_a_jump() {
-        let t = Table::new(
-            vec![0.0, 1.0, 1.0, 2.0],
-            vec![0.0, 0.0, 5.0, 5.0],
-            Outside::Clamp,
-        )
-        .unwrap();
+        let t = Table::new(vec![0.0, 1.0, 1.0, 2.0], vec![0.0, 0.0, 5.0, 5.0], Outside::Clamp).unwrap();
         assert_eq!([t.eval(0.999), t.eval(1.0), t.eval(1.5)], [0.0, 5.0, 5.0]);
         assert!(Table::new(vec![1.0, 0.0], vec![0.0, 0.0], Outside::Clamp).is_err());
     }

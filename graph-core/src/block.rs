@@ -105,8 +105,7 @@ impl Interface {
 
     /// Whether any port takes the common width.
     pub fn has_common_width(&self) -> bool {
-        self.inputs.iter().any(|p| p.width == Width::Common)
-            || self.outputs.iter().any(|p| p.width == Width::Common)
+        self.inputs.iter().any(|p| p.width == Width::Common) || self.outputs.iter().any(|p| p.width == Width::Common)
     }
 }
 

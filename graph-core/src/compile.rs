@@ -209,10 +209,7 @@ fn instantiate<'g>(g: &'g FlatGraph, reg: &Registry) -> Result<Vec<Node<'g>>, Di
         let Some(ty) = reg.get(&spec.type_name) else {
             return Err(Diagnostic::at(
                 &spec.type_pos,
-                format!(
-                    "block `{}`: unknown block type `{}`",
-                    fb.path, spec.type_name
-                ),
+                format!("block `{}`: unknown block type `{}`", fb.path, spec.type_name),
             )
             .suggest(&spec.type_name, reg.names())
             .or_hint("`ctlgraph blocks` lists the block types"));
@@ -229,8 +226,11 @@ fn instantiate<'g>(g: &'g FlatGraph, reg: &Registry) -> Result<Vec<Node<'g>>, Di
         if ty.name == INPORT || ty.name == OUTPORT {
             params.finish()?;
             if ty.name == INPORT && !fb.path.contains('/') {
-                return Err(Diagnostic::at(&spec.type_pos, format!("block `{}`: an inport only makes sense inside a subsystem", fb.path))
-                    .with_hint("a top-level graph gets its inputs from source blocks (constant, step, from_csv, …)"));
+                return Err(Diagnostic::at(
+                    &spec.type_pos,
+                    format!("block `{}`: an inport only makes sense inside a subsystem", fb.path),
+                )
+                .with_hint("a top-level graph gets its inputs from source blocks (constant, step, from_csv, …)"));
             }
             let iface = Interface::new(SampleTime::Inherited)
                 .input("in", Width::Common, true)
@@ -281,11 +281,7 @@ fn port_index(node: &Node, ep: &Endpoint, input: bool) -> Result<usize, Diagnost
         None if names.is_empty() => Err(Diagnostic::at(&ep.pos, format!("{what} has no {side}s"))),
         None => Err(Diagnostic::at(
             &ep.pos,
-            format!(
-                "{what} has {} {side}s: name one as `{}.PORT`",
-                names.len(),
-                ep.block
-            ),
+            format!("{what} has {} {side}s: name one as `{}.PORT`", names.len(), ep.block),
         )
         .with_hint(format!("{side}s: {}", names.join(", ")))),
     }
@@ -297,14 +293,10 @@ fn connect(
     nodes: &[Node],
     index: &HashMap<&str, usize>,
 ) -> Result<Vec<Vec<Option<Driver>>>, Diagnostic> {
-    let mut direct: Vec<Vec<Option<Driver>>> = nodes
-        .iter()
-        .map(|n| vec![None; n.iface.inputs.len()])
-        .collect();
+    let mut direct: Vec<Vec<Option<Driver>>> = nodes.iter().map(|n| vec![None; n.iface.inputs.len()]).collect();
     let find = |ep: &Endpoint| -> Result<usize, Diagnostic> {
         index.get(ep.block.as_str()).copied().ok_or_else(|| {
-            Diagnostic::at(&ep.pos, format!("no block named `{}`", ep.block))
-                .suggest(&ep.block, index.keys().copied())
+            Diagnostic::at(&ep.pos, format!("no block named `{}`", ep.block)).suggest(&ep.block, index.keys().copied())
         })
     };
     for w in &g.wires {
@@ -333,10 +325,7 @@ fn connect(
 
 /// Follows wires through inport/outport blocks to the real source of each
 /// real block's inputs. Virtual blocks get no drivers of their own.
-fn resolve_drivers(
-    nodes: &[Node],
-    direct: &[Vec<Option<Driver>>],
-) -> Result<Vec<Vec<Driver>>, Diagnostic> {
+fn resolve_drivers(nodes: &[Node], direct: &[Vec<Option<Driver>>]) -> Result<Vec<Vec<Driver>>, Diagnostic> {
     let unwired = |n: usize, p: usize| {
         let node = &nodes[n];
         let message = if node.is_virtual {
@@ -395,9 +384,7 @@ fn resolve_widths(nodes: &mut [Node], drivers: &[Vec<Driver>]) -> Result<(), Dia
                         nodes[i].width = Some(sw);
                         changed = true;
                     }
-                    (Width::Fixed(n), None)
-                        if nodes[d.src].iface.outputs[d.port].width == Width::Common =>
-                    {
+                    (Width::Fixed(n), None) if nodes[d.src].iface.outputs[d.port].width == Width::Common => {
                         nodes[d.src].width = Some(n);
                         changed = true;
                     }
@@ -421,29 +408,20 @@ fn resolve_widths(nodes: &mut [Node], drivers: &[Vec<Driver>]) -> Result<(), Dia
                     &d.pos,
                     format!(
                         "width mismatch: `{}.{}` carries {sw} value(s) but `{}.{}` takes {want}",
-                        src.flat.path,
-                        src.iface.outputs[d.port].name,
-                        nodes[i].flat.path,
-                        port.name
+                        src.flat.path, src.iface.outputs[d.port].name, nodes[i].flat.path, port.name
                     ),
                 )
                 .with_hint("use mux/demux/selector to change widths"));
             }
         }
     }
-    for node in nodes
-        .iter_mut()
-        .filter(|n| !n.is_virtual && n.iface.has_common_width())
-    {
+    for node in nodes.iter_mut().filter(|n| !n.is_virtual && n.iface.has_common_width()) {
         let w = *node.width.get_or_insert(1);
         if let Some(block) = node.block.as_mut() {
             block.set_width(w).map_err(|m| {
                 Diagnostic::at(
                     &node.flat.spec.pos,
-                    format!(
-                        "block `{}` ({}): {m}",
-                        node.flat.path, node.flat.spec.type_name
-                    ),
+                    format!("block `{}` ({}): {m}", node.flat.path, node.flat.spec.type_name),
                 )
             })?;
         }
@@ -465,11 +443,7 @@ fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>, Diagnosti
     }
     let mut indegree: Vec<usize> = ids
         .iter()
-        .map(|&n| {
-            graph
-                .neighbors_directed(n, petgraph::Direction::Incoming)
-                .count()
-        })
+        .map(|&n| graph.neighbors_directed(n, petgraph::Direction::Incoming).count())
         .collect();
     let mut ready: BinaryHeap<Reverse<usize>> = (0..nodes.len())
         .filter(|&i| indegree[i] == 0 && !nodes[i].is_virtual)
@@ -526,11 +500,7 @@ fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>, Diagnosti
 }
 
 /// A simple cycle from `start` back to itself inside one component.
-fn cycle_through(
-    graph: &DiGraph<usize, ()>,
-    start: NodeIndex,
-    scc: &[NodeIndex],
-) -> Vec<NodeIndex> {
+fn cycle_through(graph: &DiGraph<usize, ()>, start: NodeIndex, scc: &[NodeIndex]) -> Vec<NodeIndex> {
     let mut parent: HashMap<NodeIndex, NodeIndex> = HashMap::new();
     let mut queue = std::collections::VecDeque::from([start]);
     while let Some(n) = queue.pop_front() {
@@ -556,21 +526,16 @@ fn cycle_through(
 
 /// Sample times after inheritance: an inherited block runs at the rate of
 /// its drivers if they agree (constants aside), continuously otherwise.
-fn resolve_rates(
-    nodes: &[Node],
-    drivers: &[Vec<Driver>],
-    order: &[usize],
-) -> (HashMap<usize, Rate>, Vec<(f64, f64)>) {
+fn resolve_rates(nodes: &[Node], drivers: &[Vec<Driver>], order: &[usize]) -> (HashMap<usize, Rate>, Vec<(f64, f64)>) {
     let mut clocks: Vec<(f64, f64)> = Vec::new();
     let mut rates: HashMap<usize, Rate> = HashMap::new();
-    let mut clock =
-        |period: f64, offset: f64| match clocks.iter().position(|&c| c == (period, offset)) {
-            Some(c) => c,
-            None => {
-                clocks.push((period, offset));
-                clocks.len() - 1
-            }
-        };
+    let mut clock = |period: f64, offset: f64| match clocks.iter().position(|&c| c == (period, offset)) {
+        Some(c) => c,
+        None => {
+            clocks.push((period, offset));
+            clocks.len() - 1
+        }
+    };
     for &i in order {
         let has_states = nodes[i].block.as_ref().is_some_and(|b| b.num_states() > 0);
         let rate = match nodes[i].iface.sample_time {
@@ -611,9 +576,7 @@ fn record_columns(
         if columns.iter().any(|c| c.name == name) {
             let message = format!("`{name}` is recorded twice");
             return Err(match pos {
-                Some(p) => {
-                    Diagnostic::at(p, message).with_hint("rename one: `other_name: block.port`")
-                }
+                Some(p) => Diagnostic::at(p, message).with_hint("rename one: `other_name: block.port`"),
                 None => Diagnostic::plain(message),
             });
         }

@@ -136,10 +136,7 @@ mod tests {
     #[test]
     fn suggestions_catch_typos_only() {
         let types = ["transfer_function", "gain", "sum", "saturation"];
-        assert_eq!(
-            closest("tranfer_function", types),
-            Some("transfer_function")
-        );
+        assert_eq!(closest("tranfer_function", types), Some("transfer_function"));
         assert_eq!(closest("gian", types), Some("gain"));
         assert_eq!(closest("integrator", types), None);
     }

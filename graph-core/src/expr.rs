@@ -282,9 +282,7 @@ fn lex(src: &str) -> Result<Vec<Tok>, ExprError> {
         let c = chars[i];
         if c.is_whitespace() {
             i += 1;
-        } else if c.is_ascii_digit()
-            || (c == '.' && chars.get(i + 1).is_some_and(char::is_ascii_digit))
-        {
+        } else if c.is_ascii_digit() || (c == '.' && chars.get(i + 1).is_some_and(char::is_ascii_digit)) {
             let start = i;
             while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
                 i += 1;
@@ -375,13 +373,8 @@ impl Parser<'_> {
         if self.eat(sym) {
             return Ok(());
         }
-        let found = self
-            .peek()
-            .map_or("the end".to_string(), |t| t.kind.to_string());
-        Err(self.error_at(
-            self.end_offset(),
-            format!("expected `{sym}`, found {found}"),
-        ))
+        let found = self.peek().map_or("the end".to_string(), |t| t.kind.to_string());
+        Err(self.error_at(self.end_offset(), format!("expected `{sym}`, found {found}")))
     }
 
     fn expr(&mut self) -> Result<Node, ExprError> {
@@ -450,10 +443,7 @@ impl Parser<'_> {
                     self.name(&name, offset)
                 }
             }
-            other => Err(self.error_at(
-                offset,
-                format!("expected a number, a name or `(`, found {other}"),
-            )),
+            other => Err(self.error_at(offset, format!("expected a number, a name or `(`, found {other}"))),
         }
     }
 
@@ -465,14 +455,9 @@ impl Parser<'_> {
             None if name == "inf" => Ok(Node::Const(f64::INFINITY)),
             None => {
                 let names = self.scope.names();
-                let hint = crate::diag::closest(
-                    name,
-                    names.iter().map(String::as_str).chain(["pi", "inf"]),
-                )
-                .map(|c| format!("did you mean `{c}`?"))
-                .or_else(|| {
-                    (!names.is_empty()).then(|| format!("known names here: {}", names.join(", ")))
-                });
+                let hint = crate::diag::closest(name, names.iter().map(String::as_str).chain(["pi", "inf"]))
+                    .map(|c| format!("did you mean `{c}`?"))
+                    .or_else(|| (!names.is_empty()).then(|| format!("known names here: {}", names.join(", "))));
                 Err(ExprError {
                     offset,
                     message: format!("unknown name `{name}`"),
@@ -552,10 +537,7 @@ mod tests {
 
     fn val(src: &str) -> f64 {
         let scope: Vec<(String, f64)> = vec![("h".into(), 1e-4), ("w0".into(), 1000.0)];
-        Expr::parse(src, &Constants(&scope))
-            .unwrap()
-            .constant()
-            .unwrap()
+        Expr::parse(src, &Constants(&scope)).unwrap().constant().unwrap()
     }
 
     #[test]
@@ -615,11 +597,7 @@ mod tests {
             ("1 +", 3, "expression ends too early"),
             ("(1 + 2", 6, "expected `)`, found the end"),
             ("2 $ 3", 2, "unexpected character `$`"),
-            (
-                "1 2",
-                2,
-                "unexpected number 2 after the end of the expression",
-            ),
+            ("1 2", 2, "unexpected number 2 after the end of the expression"),
             ("sqr(2)", 0, "unknown function `sqr`"),
             ("atan2(1)", 0, "`atan2` takes two arguments, got 1"),
         ];

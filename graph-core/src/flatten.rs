@@ -69,30 +69,21 @@ enum Override {
 /// pairs; naming a parameter the graph does not have is an error.
 pub fn load(path: &Path, overrides: &[(String, String)]) -> Result<FlatGraph, Diagnostic> {
     let file: Arc<str> = path.display().to_string().into();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| Diagnostic::in_file(&file, format!("cannot read: {e}")))?;
+    let text = std::fs::read_to_string(path).map_err(|e| Diagnostic::in_file(&file, format!("cannot read: {e}")))?;
     load_str(&text, file, overrides)
 }
 
 /// Like [`load`] for text already in memory; `file` names it in messages
 /// and locates relative paths.
-pub fn load_str(
-    text: &str,
-    file: Arc<str>,
-    overrides: &[(String, String)],
-) -> Result<FlatGraph, Diagnostic> {
+pub fn load_str(text: &str, file: Arc<str>, overrides: &[(String, String)]) -> Result<FlatGraph, Diagnostic> {
     let graph = GraphFile::parse(text, file.clone())?;
-    let known: Vec<&str> = graph
-        .parameters
-        .iter()
-        .map(|(k, _)| k.name.as_str())
-        .collect();
+    let known: Vec<&str> = graph.parameters.iter().map(|(k, _)| k.name.as_str()).collect();
     for (name, _) in overrides {
         if !known.contains(&name.as_str()) {
-            return Err(Diagnostic::plain(format!(
-                "--set {name}: {file} has no parameter `{name}`"
-            ))
-            .suggest(name, known.iter().copied()));
+            return Err(
+                Diagnostic::plain(format!("--set {name}: {file} has no parameter `{name}`"))
+                    .suggest(name, known.iter().copied()),
+            );
         }
     }
     let ovr: Vec<(String, Override, Option<Pos>)> = overrides
@@ -101,12 +92,7 @@ pub fn load_str(
         .collect();
     let scope = Arc::new(eval_parameters(&graph.parameters, &ovr)?);
     let sim = sim_config(graph.simulation.as_ref(), &scope)?;
-    let dir = Arc::new(
-        Path::new(&*file)
-            .parent()
-            .map(Path::to_path_buf)
-            .unwrap_or_default(),
-    );
+    let dir = Arc::new(Path::new(&*file).parent().map(Path::to_path_buf).unwrap_or_default());
     let mut out = FlatGraph {
         file: file.clone(),
         name: graph.name.clone(),
@@ -225,19 +211,12 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
                 Kind::Map(m) => {
                     check_keys(m, &SOLVER_KEYS, "simulation.solver")?;
                     match yaml::lookup(m, "method") {
-                        Some(mv) => (
-                            mv.expect_str("`solver.method`")?,
-                            Some(mv.pos.clone()),
-                            m.as_slice(),
-                        ),
+                        Some(mv) => (mv.expect_str("`solver.method`")?, Some(mv.pos.clone()), m.as_slice()),
                         None => ("dopri5", None, m.as_slice()),
                     }
                 }
                 _ => {
-                    return Err(Diagnostic::at(
-                        &v.pos,
-                        "`solver` must be a method name or a mapping",
-                    ));
+                    return Err(Diagnostic::at(&v.pos, "`solver` must be a method name or a mapping"));
                 }
             },
         };
@@ -248,14 +227,9 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
     };
     let fixed_step = |name: &str| -> Result<f64, Diagnostic> {
         opt("step")?.ok_or_else(|| {
-            let pos = method_pos
-                .clone()
-                .unwrap_or_else(|| Pos::new("?".into(), 0, 0));
-            Diagnostic::at(
-                &pos,
-                format!("the fixed-step method `{name}` needs a `step`"),
-            )
-            .with_hint(format!("solver: {{ method: {name}, step: 1.0e-4 }}"))
+            let pos = method_pos.clone().unwrap_or_else(|| Pos::new("?".into(), 0, 0));
+            Diagnostic::at(&pos, format!("the fixed-step method `{name}` needs a `step`"))
+                .with_hint(format!("solver: {{ method: {name}, step: 1.0e-4 }}"))
         })
     };
     let method = match method_name {
@@ -284,11 +258,9 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
         },
         other => {
             let pos = method_pos.unwrap_or_else(|| Pos::new("?".into(), 0, 0));
-            return Err(
-                Diagnostic::at(&pos, format!("unknown solver method `{other}`"))
-                    .suggest(other, METHODS)
-                    .or_hint(format!("methods: {}", METHODS.join(", "))),
-            );
+            return Err(Diagnostic::at(&pos, format!("unknown solver method `{other}`"))
+                .suggest(other, METHODS)
+                .or_hint(format!("methods: {}", METHODS.join(", "))));
         }
     };
     if !method.is_adaptive() {
@@ -356,10 +328,8 @@ fn expand(
     let names: Vec<&str> = g.blocks.iter().map(|b| b.name.as_str()).collect();
     let resolve = |ep: &Endpoint, is_src: bool| -> Result<Endpoint, Diagnostic> {
         if !names.contains(&ep.block.as_str()) {
-            return Err(
-                Diagnostic::at(&ep.pos, format!("wire: no block named `{}`", ep.block))
-                    .suggest(&ep.block, names.iter().copied()),
-            );
+            return Err(Diagnostic::at(&ep.pos, format!("wire: no block named `{}`", ep.block))
+                .suggest(&ep.block, names.iter().copied()));
         }
         let Some((ins, outs)) = subs.get(ep.block.as_str()) else {
             return Ok(Endpoint {
@@ -367,11 +337,7 @@ fn expand(
                 ..ep.clone()
             });
         };
-        let (ports, side) = if is_src {
-            (outs, "outport")
-        } else {
-            (ins, "inport")
-        };
+        let (ports, side) = if is_src { (outs, "outport") } else { (ins, "inport") };
         let port = resolve_sub_port(ep, ports, side)?;
         Ok(Endpoint {
             block: format!("{prefix}{}/{port}", ep.block),
@@ -392,23 +358,12 @@ fn expand(
 }
 
 /// Which inport/outport block of a subsystem an endpoint means.
-pub fn resolve_sub_port<'a>(
-    ep: &Endpoint,
-    ports: &'a [String],
-    side: &str,
-) -> Result<&'a str, Diagnostic> {
+pub fn resolve_sub_port<'a>(ep: &Endpoint, ports: &'a [String], side: &str) -> Result<&'a str, Diagnostic> {
     match &ep.port {
-        Some(p) => ports
-            .iter()
-            .find(|n| *n == p)
-            .map(String::as_str)
-            .ok_or_else(|| {
-                Diagnostic::at(
-                    &ep.pos,
-                    format!("subsystem `{}` has no {side} `{p}`", ep.block),
-                )
+        Some(p) => ports.iter().find(|n| *n == p).map(String::as_str).ok_or_else(|| {
+            Diagnostic::at(&ep.pos, format!("subsystem `{}` has no {side} `{p}`", ep.block))
                 .suggest(p, ports.iter().map(String::as_str))
-            }),
+        }),
         None if ports.len() == 1 => Ok(&ports[0]),
         None => Err(Diagnostic::at(
             &ep.pos,
@@ -436,20 +391,14 @@ fn load_subsystem(
     let what = format!("block `{path}` (subsystem)");
     check_keys(&b.params, &SUBSYSTEM_KEYS, &what)?;
     let Some(file_v) = yaml::lookup(&b.params, "file") else {
-        return Err(
-            Diagnostic::at(&b.pos, format!("{what}: missing parameter `file`"))
-                .with_hint("the graph file to include, relative to this file"),
-        );
+        return Err(Diagnostic::at(&b.pos, format!("{what}: missing parameter `file`"))
+            .with_hint("the graph file to include, relative to this file"));
     };
     let rel = file_v.expect_str(&format!("{what}: `file`"))?;
     let sub_path = dir.join(rel);
     let sub_file: Arc<str> = sub_path.display().to_string().into();
-    let text = std::fs::read_to_string(&sub_path).map_err(|e| {
-        Diagnostic::at(
-            &file_v.pos,
-            format!("{what}: cannot read `{sub_file}`: {e}"),
-        )
-    })?;
+    let text = std::fs::read_to_string(&sub_path)
+        .map_err(|e| Diagnostic::at(&file_v.pos, format!("{what}: cannot read `{sub_file}`: {e}")))?;
     let canon = canonical(&sub_path);
     if stack.contains(&canon) {
         return Err(Diagnostic::at(
@@ -458,20 +407,15 @@ fn load_subsystem(
         ));
     }
     let sub = GraphFile::parse(&text, sub_file.clone())?;
-    let known: Vec<&str> = sub
-        .parameters
-        .iter()
-        .map(|(k, _)| k.name.as_str())
-        .collect();
+    let known: Vec<&str> = sub.parameters.iter().map(|(k, _)| k.name.as_str()).collect();
     let mut overrides = Vec::new();
     if let Some(p) = yaml::lookup(&b.params, "parameters") {
         for (k, v) in p.expect_map(&format!("{what}: `parameters`"))? {
             if !known.contains(&k.name.as_str()) {
-                return Err(Diagnostic::at(
-                    &k.pos,
-                    format!("{what}: `{sub_file}` has no parameter `{}`", k.name),
-                )
-                .suggest(&k.name, known.iter().copied()));
+                return Err(
+                    Diagnostic::at(&k.pos, format!("{what}: `{sub_file}` has no parameter `{}`", k.name))
+                        .suggest(&k.name, known.iter().copied()),
+                );
             }
             let value = match &v.kind {
                 Kind::Num(x) => *x,
@@ -500,8 +444,6 @@ pub fn parse_set(arg: &str) -> Result<(String, String), Diagnostic> {
         Some((n, v)) if !n.trim().is_empty() && !v.trim().is_empty() => {
             Ok((n.trim().to_string(), v.trim().to_string()))
         }
-        _ => Err(Diagnostic::plain(format!(
-            "--set {arg}: expected NAME=VALUE"
-        ))),
+        _ => Err(Diagnostic::plain(format!("--set {arg}: expected NAME=VALUE"))),
     }
 }

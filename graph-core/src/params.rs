@@ -79,10 +79,7 @@ impl<'a> Params<'a> {
             .map_or(self.block_pos, |(_, v)| &v.pos);
         Diagnostic::at(
             pos,
-            format!(
-                "block `{}` ({}): `{key}`: {message}",
-                self.block, self.type_name
-            ),
+            format!("block `{}` ({}): `{key}`: {message}", self.block, self.type_name),
         )
     }
 
@@ -104,10 +101,7 @@ impl<'a> Params<'a> {
         match &v.kind {
             Kind::Num(x) => Ok(*x),
             Kind::Str(s) => eval_number(s, &v.pos, self.scope).map_err(|d| {
-                let message = format!(
-                    "block `{}` ({}): `{key}`: {}",
-                    self.block, self.type_name, d.message
-                );
+                let message = format!("block `{}` ({}): `{key}`: {}", self.block, self.type_name, d.message);
                 Diagnostic { message, ..d }
             }),
             _ => Err(self.error(key, format!("expected a number, found {}", v.describe()))),
@@ -182,10 +176,7 @@ impl<'a> Params<'a> {
         match &v.kind {
             Kind::Seq(items) => items.iter().map(|i| self.number_value(key, i)).collect(),
             Kind::Num(_) | Kind::Str(_) => Ok(vec![self.number_value(key, v)?]),
-            _ => Err(self.error(
-                key,
-                format!("expected a list of numbers, found {}", v.describe()),
-            )),
+            _ => Err(self.error(key, format!("expected a list of numbers, found {}", v.describe()))),
         }
     }
 
@@ -195,9 +186,7 @@ impl<'a> Params<'a> {
             return Err(self.missing(key));
         };
         match &v.kind {
-            Kind::Seq(rows)
-                if rows.iter().all(|r| matches!(r.kind, Kind::Seq(_))) && !rows.is_empty() =>
-            {
+            Kind::Seq(rows) if rows.iter().all(|r| matches!(r.kind, Kind::Seq(_))) && !rows.is_empty() => {
                 rows.iter().map(|r| self.vector_value(key, r)).collect()
             }
             Kind::Seq(rows) if rows.is_empty() => Ok(Vec::new()),
@@ -220,10 +209,7 @@ impl<'a> Params<'a> {
         for item in items {
             match &item.kind {
                 Kind::Seq(pair) if pair.len() == 2 => {
-                    let (re, im) = (
-                        self.number_value(key, &pair[0])?,
-                        self.number_value(key, &pair[1])?,
-                    );
+                    let (re, im) = (self.number_value(key, &pair[0])?, self.number_value(key, &pair[1])?);
                     out.push((re, im));
                     if im != 0.0 {
                         out.push((re, -im));
@@ -256,11 +242,7 @@ impl<'a> Params<'a> {
     }
 
     /// One of `options` (the first is the default).
-    pub fn choice(
-        &mut self,
-        key: &str,
-        options: &[&'static str],
-    ) -> Result<&'static str, Diagnostic> {
+    pub fn choice(&mut self, key: &str, options: &[&'static str]) -> Result<&'static str, Diagnostic> {
         let Some(s) = self.opt_string(key)? else {
             return Ok(options[0]);
         };
@@ -275,10 +257,7 @@ impl<'a> Params<'a> {
             None => Ok(default),
             Some(v) => match v.kind {
                 Kind::Bool(b) => Ok(b),
-                _ => Err(self.error(
-                    key,
-                    format!("expected true or false, found {}", v.describe()),
-                )),
+                _ => Err(self.error(key, format!("expected true or false, found {}", v.describe()))),
             },
         }
     }
@@ -292,10 +271,7 @@ impl<'a> Params<'a> {
             Kind::Seq(items) => items.as_slice(),
             _ => std::slice::from_ref(v),
         };
-        items
-            .iter()
-            .map(|i| i.expect_str(&format!("`{key}` item")))
-            .collect()
+        items.iter().map(|i| i.expect_str(&format!("`{key}` item"))).collect()
     }
 
     /// A file path, relative to the graph file's folder.
@@ -311,10 +287,9 @@ impl<'a> Params<'a> {
             return Ok(default);
         };
         let (period, offset) = match &v.kind {
-            Kind::Seq(items) if items.len() == 2 => (
-                self.number_value(key, &items[0])?,
-                self.number_value(key, &items[1])?,
-            ),
+            Kind::Seq(items) if items.len() == 2 => {
+                (self.number_value(key, &items[0])?, self.number_value(key, &items[1])?)
+            }
             Kind::Str(s) if s == "inf" => return Ok(SampleTime::Constant),
             Kind::Seq(_) => return Err(self.error(key, "expected a period or [period, offset]")),
             _ => (self.number_value(key, v)?, 0.0),

@@ -33,12 +33,7 @@ pub enum SimError {
 impl fmt::Display for SimError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            SimError::NonFinite {
-                t,
-                block,
-                what,
-                value,
-            } => {
+            SimError::NonFinite { t, block, what, value } => {
                 write!(f, "t = {t}: block `{block}`: {what} is {value}")
             }
             SimError::Solver { t, error } => write!(f, "t = {t}: solver: {error}"),
@@ -99,11 +94,7 @@ impl Simulator {
     pub fn new(model: Model, stop: Option<f64>) -> Self {
         let stop = stop.unwrap_or(model.sim.stop);
         let method = model.sim.method;
-        let grid_step = if method.is_adaptive() {
-            0.0
-        } else {
-            method.max_step()
-        };
+        let grid_step = if method.is_adaptive() { 0.0 } else { method.max_step() };
         let clocks: Vec<Clock> = model
             .clocks
             .iter()
@@ -353,11 +344,7 @@ impl Simulator {
         for b in &self.model.blocks {
             event = event.min(b.next_event(self.t));
         }
-        if event <= next + self.tol {
-            event
-        } else {
-            next
-        }
+        if event <= next + self.tol { event } else { next }
     }
 
     /// Runs to the stop time, handing the signals to `sink` at every major

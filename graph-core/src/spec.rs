@@ -88,12 +88,11 @@ impl GraphFile {
         };
         for (key, _) in top {
             if !TOP_KEYS.contains(&key.name.as_str()) {
-                return Err(Diagnostic::at(
-                    &key.pos,
-                    format!("unknown top-level key `{}`", key.name),
-                )
-                .suggest(&key.name, TOP_KEYS)
-                .or_hint(format!("top-level keys: {}", TOP_KEYS.join(", "))));
+                return Err(
+                    Diagnostic::at(&key.pos, format!("unknown top-level key `{}`", key.name))
+                        .suggest(&key.name, TOP_KEYS)
+                        .or_hint(format!("top-level keys: {}", TOP_KEYS.join(", "))),
+                );
             }
         }
         let text_of = |k: &str| -> Result<Option<String>, Diagnostic> {
@@ -114,10 +113,7 @@ impl GraphFile {
             None => Vec::new(),
         };
         let wires = match yaml::lookup(top, "wires") {
-            Some(w) => seq(w, "`wires`")?
-                .iter()
-                .map(parse_wire)
-                .collect::<Result<_, _>>()?,
+            Some(w) => seq(w, "`wires`")?.iter().map(parse_wire).collect::<Result<_, _>>()?,
             None => Vec::new(),
         };
         let (record, record_every) = match yaml::lookup(top, "record") {
@@ -151,17 +147,15 @@ fn seq<'a>(v: &'a Yaml, what: &str) -> Result<&'a [Yaml], Diagnostic> {
 
 fn is_identifier(s: &str) -> bool {
     let mut chars = s.chars();
-    chars.next().is_some_and(|c| c.is_alphabetic() || c == '_')
-        && chars.all(|c| c.is_alphanumeric() || c == '_')
+    chars.next().is_some_and(|c| c.is_alphabetic() || c == '_') && chars.all(|c| c.is_alphanumeric() || c == '_')
 }
 
 fn parse_block((key, value): &(Key, Yaml)) -> Result<BlockSpec, Diagnostic> {
     if !is_identifier(&key.name) {
-        return Err(Diagnostic::at(
-            &key.pos,
-            format!("`{}` is not a valid block name", key.name),
-        )
-        .with_hint("block names are letters, digits and `_`, starting with a letter or `_`"));
+        return Err(
+            Diagnostic::at(&key.pos, format!("`{}` is not a valid block name", key.name))
+                .with_hint("block names are letters, digits and `_`, starting with a letter or `_`"),
+        );
     }
     let entries = match &value.kind {
         Kind::Map(m) => m,
@@ -177,14 +171,10 @@ fn parse_block((key, value): &(Key, Yaml)) -> Result<BlockSpec, Diagnostic> {
         }
     };
     let Some(ty) = yaml::lookup(entries, "type") else {
-        return Err(
-            Diagnostic::at(&key.pos, format!("block `{}` has no `type`", key.name))
-                .with_hint("`ctlgraph blocks` lists the block types"),
-        );
+        return Err(Diagnostic::at(&key.pos, format!("block `{}` has no `type`", key.name))
+            .with_hint("`ctlgraph blocks` lists the block types"));
     };
-    let type_name = ty
-        .expect_str(&format!("block `{}`: `type`", key.name))?
-        .to_string();
+    let type_name = ty.expect_str(&format!("block `{}`: `type`", key.name))?.to_string();
     Ok(BlockSpec {
         name: key.name.clone(),
         pos: key.pos.clone(),
@@ -245,18 +235,13 @@ fn parse_record(v: &Yaml) -> Result<Records, Diagnostic> {
         Kind::Map(m) => {
             for (k, _) in m {
                 if k.name != "signals" && k.name != "every" {
-                    return Err(Diagnostic::at(
-                        &k.pos,
-                        format!("unknown key `{}` in `record`", k.name),
-                    )
-                    .suggest(&k.name, ["signals", "every"]));
+                    return Err(Diagnostic::at(&k.pos, format!("unknown key `{}` in `record`", k.name))
+                        .suggest(&k.name, ["signals", "every"]));
                 }
             }
             let every = match yaml::lookup(m, "every") {
                 Some(e) => match e.kind {
-                    Kind::Num(n) if n >= 1.0 && n.fract() == 0.0 => {
-                        Some((n as usize, e.pos.clone()))
-                    }
+                    Kind::Num(n) if n >= 1.0 && n.fract() == 0.0 => Some((n as usize, e.pos.clone())),
                     _ => {
                         return Err(Diagnostic::at(
                             &e.pos,
@@ -305,18 +290,13 @@ mod tests {
 
     #[test]
     fn wires_and_records() {
-        let text = "blocks:\n  a: {type: constant}\nwires:\n  - a.y -> b.u1, c\nrecord:\n  every: 2\n  signals: [a, y: b.y]\n";
+        let text =
+            "blocks:\n  a: {type: constant}\nwires:\n  - a.y -> b.u1, c\nrecord:\n  every: 2\n  signals: [a, y: b.y]\n";
         let g = GraphFile::parse(text, "g.yaml".into()).unwrap();
         let w = &g.wires[0];
         assert_eq!(w.src.to_string(), "a.y");
-        assert_eq!(
-            (w.dsts[0].to_string(), w.dsts[0].pos.col),
-            ("b.u1".to_string(), 12)
-        );
-        assert_eq!(
-            (w.dsts[1].to_string(), w.dsts[1].pos.col),
-            ("c".to_string(), 18)
-        );
+        assert_eq!((w.dsts[0].to_string(), w.dsts[0].pos.col), ("b.u1".to_string(), 12));
+        assert_eq!((w.dsts[1].to_string(), w.dsts[1].pos.col), ("c".to_string(), 18));
         assert_eq!(g.record[1].name, "y");
         assert_eq!(g.record_every.map(|e| e.0), Some(2));
     }

@@ -76,12 +76,8 @@ impl Yaml {
     }
 
     pub fn expect_str(&self, what: &str) -> Result<&str, Diagnostic> {
-        self.as_str().ok_or_else(|| {
-            Diagnostic::at(
-                &self.pos,
-                format!("{what} must be a string, found {}", self.describe()),
-            )
-        })
+        self.as_str()
+            .ok_or_else(|| Diagnostic::at(&self.pos, format!("{what} must be a string, found {}", self.describe())))
     }
 }
 
@@ -115,20 +111,13 @@ fn syntax_error(err: &serde_saphyr::Error, file: &Arc<str>) -> Diagnostic {
         None => format!("YAML syntax: {message}"),
     };
     match err.location() {
-        Some(loc) => Diagnostic::at(
-            &Pos::new(file.clone(), loc.line() as u32, loc.column() as u32),
-            message,
-        ),
+        Some(loc) => Diagnostic::at(&Pos::new(file.clone(), loc.line() as u32, loc.column() as u32), message),
         None => Diagnostic::in_file(file, message),
     }
 }
 
 fn pos_of<T>(s: &Spanned<T>, file: &Arc<str>) -> Pos {
-    Pos::new(
-        file.clone(),
-        s.referenced.line() as u32,
-        s.referenced.column() as u32,
-    )
+    Pos::new(file.clone(), s.referenced.line() as u32, s.referenced.column() as u32)
 }
 
 fn convert(node: Spanned<Node>, file: &Arc<str>) -> Yaml {
@@ -238,15 +227,8 @@ mod tests {
 
     #[test]
     fn positions_of_nested_values() {
-        let y = parse(
-            "blocks:\n  g: { type: gain, k: \"2*a\" }\n  v: [1, 2]\n",
-            &file(),
-        )
-        .unwrap();
-        let blocks = lookup(y.as_map().unwrap(), "blocks")
-            .unwrap()
-            .as_map()
-            .unwrap();
+        let y = parse("blocks:\n  g: { type: gain, k: \"2*a\" }\n  v: [1, 2]\n", &file()).unwrap();
+        let blocks = lookup(y.as_map().unwrap(), "blocks").unwrap().as_map().unwrap();
         let (key, g) = &blocks[0];
         assert_eq!((key.name.as_str(), key.pos.line, key.pos.col), ("g", 2, 3));
         let k = lookup(g.as_map().unwrap(), "k").unwrap();
@@ -260,10 +242,7 @@ mod tests {
     #[test]
     fn syntax_and_duplicate_errors_are_positioned() {
         let e = parse("a: [1, 2\nb: 3\n", &file()).unwrap_err();
-        assert!(
-            e.pos.is_some() && e.message.starts_with("YAML syntax"),
-            "{e}"
-        );
+        assert!(e.pos.is_some() && e.message.starts_with("YAML syntax"), "{e}");
         let e = parse("a: 1\nb: 2\na: 3\n", &file()).unwrap_err();
         assert_eq!(
             e.to_string(),

@@ -23,10 +23,7 @@ pub struct StateSpace {
 #[derive(Clone, Debug, PartialEq)]
 pub enum LtiError {
     /// The numerator's degree exceeds the denominator's.
-    Improper {
-        num_degree: usize,
-        den_degree: usize,
-    },
+    Improper { num_degree: usize, den_degree: usize },
     /// The denominator is the zero polynomial.
     ZeroDenominator,
     /// Matrix shapes do not fit together.
@@ -38,10 +35,7 @@ pub enum LtiError {
 impl fmt::Display for LtiError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            LtiError::Improper {
-                num_degree,
-                den_degree,
-            } => write!(
+            LtiError::Improper { num_degree, den_degree } => write!(
                 f,
                 "improper transfer function: numerator degree {num_degree} exceeds denominator degree {den_degree}"
             ),
@@ -55,19 +49,12 @@ impl std::error::Error for LtiError {}
 
 impl StateSpace {
     /// Builds a system from row-major matrices, checking their shapes.
-    pub fn new(
-        a: Vec<Vec<f64>>,
-        b: Vec<Vec<f64>>,
-        c: Vec<Vec<f64>>,
-        d: Vec<Vec<f64>>,
-    ) -> Result<Self, LtiError> {
+    pub fn new(a: Vec<Vec<f64>>, b: Vec<Vec<f64>>, c: Vec<Vec<f64>>, d: Vec<Vec<f64>>) -> Result<Self, LtiError> {
         let n = a.len();
         let rect = |m: &[Vec<f64>], name: &str| -> Result<usize, LtiError> {
             let cols = m.first().map_or(0, Vec::len);
             if m.iter().any(|r| r.len() != cols) {
-                return Err(LtiError::Shape(format!(
-                    "{name}: rows have different lengths"
-                )));
+                return Err(LtiError::Shape(format!("{name}: rows have different lengths")));
             }
             Ok(cols)
         };
@@ -86,15 +73,11 @@ impl StateSpace {
         }
         let p = c.len();
         if rect(&c, "C")? != n && p > 0 {
-            return Err(LtiError::Shape(format!(
-                "C must have {n} columns (one per state)"
-            )));
+            return Err(LtiError::Shape(format!("C must have {n} columns (one per state)")));
         }
         let m = if n == 0 { rect(&d, "D")? } else { m };
         if d.len() != p || rect(&d, "D")? != m {
-            return Err(LtiError::Shape(format!(
-                "D must be {p}×{m} (outputs × inputs)"
-            )));
+            return Err(LtiError::Shape(format!("D must be {p}×{m} (outputs × inputs)")));
         }
         let flat = |m: Vec<Vec<f64>>| m.into_iter().flatten().collect::<Vec<_>>();
         Ok(StateSpace {
@@ -194,11 +177,7 @@ pub fn tf2ss(num: &[f64], den: &[f64]) -> Result<StateSpace, LtiError> {
 }
 
 /// Numerator and denominator of `k · Π(s − zᵢ) / Π(s − pᵢ)`.
-pub fn zpk2tf(
-    zeros: &[Complex<f64>],
-    poles: &[Complex<f64>],
-    gain: f64,
-) -> Result<(Vec<f64>, Vec<f64>), LtiError> {
+pub fn zpk2tf(zeros: &[Complex<f64>], poles: &[Complex<f64>], gain: f64) -> Result<(Vec<f64>, Vec<f64>), LtiError> {
     let num: Vec<f64> = poly::from_roots(zeros)
         .map_err(LtiError::Roots)?
         .iter()
@@ -244,10 +223,7 @@ mod tests {
             let ss = tf2ss(&num, &den).unwrap();
             for w in [0.0, 0.3, 7.0, 150.0] {
                 let (a, b) = (freq_response(&ss, w), tf_response(&num, &den, w));
-                assert!(
-                    (a - b).norm() <= 1e-10 * b.norm().max(1.0),
-                    "w={w}: {a} vs {b}"
-                );
+                assert!((a - b).norm() <= 1e-10 * b.norm().max(1.0), "w={w}: {a} vs {b}");
             }
         }
     }
@@ -279,12 +255,7 @@ mod tests {
             vec![vec![0.0]],
         );
         assert!(ok.is_ok());
-        let bad = StateSpace::new(
-            vec![vec![0.0, 1.0]],
-            vec![vec![0.0]],
-            vec![vec![1.0]],
-            vec![vec![0.0]],
-        );
+        let bad = StateSpace::new(vec![vec![0.0, 1.0]], vec![vec![0.0]], vec![vec![1.0]], vec![vec![0.0]]);
         assert!(matches!(bad, Err(LtiError::Shape(_))));
     }
 }

@@ -308,13 +308,7 @@ impl Integrator {
             let mut sum = 0.0;
             for i in 0..x.len() {
                 let k = &self.k;
-                let err = h
-                    * (E1 * k[0][i]
-                        + E3 * k[2][i]
-                        + E4 * k[3][i]
-                        + E5 * k[4][i]
-                        + E6 * k[5][i]
-                        + E7 * k[6][i]);
+                let err = h * (E1 * k[0][i] + E3 * k[2][i] + E4 * k[3][i] + E5 * k[4][i] + E6 * k[5][i] + E7 * k[6][i]);
                 let scale = atol + rtol * x[i].abs().max(self.x_new[i].abs());
                 sum += (err / scale) * (err / scale);
             }
@@ -331,11 +325,7 @@ impl Integrator {
                 // A step cut short to land on the limit says nothing about
                 // the step the dynamics allow: keep the larger proposal.
                 let proposal = (h * factor).min(max_step);
-                self.h_next = if landing {
-                    proposal.max(self.h_next)
-                } else {
-                    proposal
-                };
+                self.h_next = if landing { proposal.max(self.h_next) } else { proposal };
                 x.copy_from_slice(&self.x_new);
                 self.k.swap(0, 6);
                 self.stats.steps += 1;
@@ -348,15 +338,7 @@ impl Integrator {
 
     /// Starting step size after Hairer, Nørsett & Wanner I, II.4 (the
     /// algorithm MATLAB and SciPy use), from `k[0] = f(t, x)`.
-    fn initial_step(
-        &mut self,
-        sys: &mut dyn OdeSystem,
-        t: f64,
-        x: &[f64],
-        rtol: f64,
-        atol: f64,
-        max_step: f64,
-    ) -> f64 {
+    fn initial_step(&mut self, sys: &mut dyn OdeSystem, t: f64, x: &[f64], rtol: f64, atol: f64, max_step: f64) -> f64 {
         let n = x.len() as f64;
         let (mut d0, mut d1) = (0.0, 0.0);
         for i in 0..x.len() {
@@ -365,11 +347,7 @@ impl Integrator {
             d1 += (self.k[0][i] / sc).powi(2);
         }
         let (d0, d1) = ((d0 / n).sqrt(), (d1 / n).sqrt());
-        let h0 = if d0 < 1e-5 || d1 < 1e-5 {
-            1e-6
-        } else {
-            0.01 * d0 / d1
-        };
+        let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
         let h0 = h0.min(max_step);
         self.stage(x, h0, &[(0, 1.0)]);
         self.eval(sys, 1, t + h0, true, x);
