@@ -49,7 +49,9 @@ pub const TYPES: &[BlockType] = &[
         doc: "With y⁻ and t⁻ the output and time of the last major step (or sample hit): \
               y = y⁻ + clamp((u − y⁻)/(t − t⁻), falling, rising)·(t − t⁻). The output starts at \
               `initial` and slews from there, so |dy/dt| never exceeds the limits. Continuous by \
-              default (evaluated at minor steps too); with a sample time it is a discrete limiter.",
+              default (evaluated at minor steps too); with a sample time it is a discrete limiter. As in \
+              Simulink, the slew starts from the previous major step, so a step input at t₀ is already \
+              partly passed at t₀.",
         inputs: U,
         outputs: Y,
         params: &[

@@ -89,7 +89,8 @@ impl PidLaw {
             AntiWindup::None => ki_e,
             AntiWindup::BackCalculation { kb } => ki_e + kb * (u - v),
             AntiWindup::Clamping => {
-                let pushing = (v > u && ki_e > 0.0) || (v < u && ki_e < 0.0);
+                // At or beyond a limit and integrating further into it.
+                let pushing = (v >= self.upper && ki_e > 0.0) || (v <= self.lower && ki_e < 0.0);
                 if pushing { 0.0 } else { ki_e }
             }
         }

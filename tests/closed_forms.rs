@@ -1,0 +1,125 @@
+//! Simulated responses against closed-form solutions. The bounds are tight
+//! enough that a wrong or lower-order solver fails them.
+
+mod common;
+use common::{max_error, run};
+
+fn first_order(solver: &str) -> String {
+    format!(
+        "parameters: {{ tau: 0.5 }}\n\
+         simulation: {{ stop: 3.0, solver: {solver} }}\n\
+         blocks:\n  u: {{ type: step }}\n  plant: {{ type: transfer_function, num: [1], den: [tau, 1] }}\n\
+         wires: [u -> plant]\nrecord: [y: plant]\n"
+    )
+}
+
+#[test]
+fn first_order_step_response_rk4() {
+    let trace = run(&first_order("{ method: rk4, step: 1.0e-2 }"));
+    // RK4's global error at h = 0.01 is ~1e-10; Euler's would be ~4e-3.
+    let err = max_error(&trace, "y", |t| 1.0 - (-t / 0.5).exp());
+    assert!(err < 1e-9, "max error {err}");
+    assert_eq!(trace.t().len(), 301);
+}
+
+#[test]
+fn first_order_step_response_dopri5() {
+    let trace = run(&first_order("{ method: dopri5, rtol: 1.0e-9, atol: 1.0e-12 }"));
+    let err = max_error(&trace, "y", |t| 1.0 - (-t / 0.5).exp());
+    assert!(err < 1e-8, "max error {err}");
+}
+
+#[test]
+fn euler_is_visibly_worse_than_rk4() {
+    let trace = run(&first_order("{ method: euler, step: 1.0e-2 }"));
+    let err = max_error(&trace, "y", |t| 1.0 - (-t / 0.5).exp());
+    assert!(err > 1e-3 && err < 1e-2, "euler error {err}");
+}
+
+#[test]
+fn second_order_underdamped_step_response() {
+    // G = wn²/(s² + 2ζwn s + wn²): y = 1 − e^{−ζwn t}(cos wd t + ζ/√(1−ζ²) sin wd t).
+    let (wn, zeta): (f64, f64) = (10.0, 0.2);
+    let yaml = format!(
+        "simulation: {{ stop: 2.0, solver: {{ method: rk4, step: 1.0e-3 }} }}\n\
+         blocks:\n  u: {{ type: step }}\n  \
+         plant: {{ type: transfer_function, num: [{n}], den: [1, {d1}, {n}] }}\n\
+         wires: [u -> plant]\nrecord: [y: plant]\n",
+        n = wn * wn,
+        d1 = 2.0 * zeta * wn
+    );
+    let trace = run(&yaml);
+    let wd = wn * (1.0 - zeta * zeta).sqrt();
+    let exact =
+        |t: f64| 1.0 - (-zeta * wn * t).exp() * ((wd * t).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * t).sin());
+    let err = max_error(&trace, "y", exact);
+    // RK4 at h = 1e-3: ~2e-10; a second-order method would be ~1e-5 off.
+    assert!(err < 1e-9, "max error {err}");
+    // Overshoot e^{−πζ/√(1−ζ²)} = 52.66 %.
+    let peak = trace.column("y").unwrap().iter().cloned().fold(0.0, f64::max);
+    let expected = 1.0 + (-std::f64::consts::PI * zeta / (1.0 - zeta * zeta).sqrt()).exp();
+    assert!((peak - expected).abs() < 1e-5, "peak {peak} vs {expected}");
+}
+
+#[test]
+fn integrator_of_a_ramp_is_a_parabola() {
+    let yaml = "simulation: { stop: 2.0, solver: { method: rk4, step: 0.1 } }\n\
+                blocks:\n  r: { type: ramp, slope: 3.0 }\n  i: { type: integrator, initial: 1.0 }\n\
+                wires: [r -> i]\nrecord: [i]\n";
+    let trace = run(yaml);
+    // RK4 integrates polynomials of degree <= 4 exactly.
+    let err = max_error(&trace, "i", |t| 1.0 + 1.5 * t * t);
+    assert!(err < 1e-12, "max error {err}");
+}
+
+#[test]
+fn zpk_and_state_space_match_the_transfer_function() {
+    let yaml = "simulation: { stop: 1.0, solver: { method: rk4, step: 1.0e-3 } }\n\
+                blocks:\n  u: { type: sine, frequency: 2.0 }\n\
+                \x20 tf: { type: transfer_function, num: [2, 10], den: [1, 3, 25] }\n\
+                \x20 zp: { type: zpk, zeros: [-5], poles: [[-1.5, 4.769696007084728]], gain: 2 }\n\
+                \x20 ss: { type: state_space, A: [[0, 1], [-25, -3]], B: [[0], [1]], C: [[10, 2]] }\n\
+                wires: [u -> tf, u -> zp, u -> ss]\nrecord: [tf, zp, ss]\n";
+    let trace = run(yaml);
+    let (tf, zp, ss) = (
+        trace.column("tf").unwrap(),
+        trace.column("zp").unwrap(),
+        trace.column("ss").unwrap(),
+    );
+    for i in 0..tf.len() {
+        assert!((tf[i] - zp[i]).abs() < 1e-9 && (tf[i] - ss[i]).abs() < 1e-9, "row {i}");
+    }
+    assert!(tf.iter().any(|v| v.abs() > 0.1));
+}
+
+#[test]
+fn pid_loop_settles_without_steady_state_error() {
+    let yaml = std::fs::read_to_string("graphs/tutorial/pid_loop.yaml").unwrap();
+    let trace = run(&yaml);
+    let y = trace.column("y").unwrap();
+    assert!(
+        (y.last().unwrap() - 1.0).abs() < 1e-3,
+        "integral action removes the error"
+    );
+    let u = trace.column("u").unwrap();
+    assert!(u.iter().all(|v| v.abs() <= 5.0), "output limits hold");
+    assert!(u.iter().any(|v| *v == 5.0), "the limit is reached at the step");
+}
+
+#[test]
+fn step_switches_exactly_at_its_time() {
+    // With dopri5 the step time is an event: a major step lands on it, the
+    // value before is 0 and from it on 1.
+    let yaml = "simulation: { stop: 1.0 }\nblocks:\n  s: { type: step, at: 0.3 }\n  i: { type: integrator }\n\
+                wires: [s -> i]\nrecord: [s, i]\n";
+    let trace = run(yaml);
+    let k = trace
+        .t()
+        .iter()
+        .position(|&t| t == 0.3)
+        .expect("a major step at exactly 0.3");
+    assert_eq!(trace.column("s").unwrap()[k], 1.0);
+    assert_eq!(trace.column("s").unwrap()[k - 1], 0.0);
+    let err = max_error(&trace, "i", |t| (t - 0.3).max(0.0));
+    assert!(err < 1e-12, "integral of the step {err}");
+}

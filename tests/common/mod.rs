@@ -1,0 +1,29 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use ctlgraph::record::Trace;
+
+/// Compiles graph text (named `test.yaml` in messages) and runs it.
+pub fn run(yaml: &str) -> Trace {
+    let model = ctlgraph::compile_str(yaml, "test.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
+    ctlgraph::simulate(model, None).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The compile error of graph text.
+pub fn error(yaml: &str) -> ctlgraph::core::Diagnostic {
+    match ctlgraph::compile_str(yaml, "test.yaml", &[]) {
+        Ok(_) => panic!("expected an error for:\n{yaml}"),
+        Err(d) => d,
+    }
+}
+
+/// Largest |a - b| over a column against a closed form f(t).
+pub fn max_error(trace: &Trace, column: &str, f: impl Fn(f64) -> f64) -> f64 {
+    let ys = trace.column(column).unwrap_or_else(|| panic!("no column {column}"));
+    trace
+        .t()
+        .iter()
+        .zip(ys)
+        .map(|(&t, &y)| (y - f(t)).abs())
+        .fold(0.0, f64::max)
+}

@@ -1,0 +1,218 @@
+//! Discrete blocks' exact sequences, multi-rate hold behaviour and exact
+//! landing on sample hits.
+
+mod common;
+use common::{max_error, run};
+
+/// Rows whose time is (within 1e-12) a multiple of `period` after `offset`,
+/// as (k, row index).
+fn hits(t: &[f64], period: f64, offset: f64) -> Vec<(usize, usize)> {
+    t.iter()
+        .enumerate()
+        .filter_map(|(i, &ti)| {
+            let k = ((ti - offset) / period).round();
+            (k >= 0.0 && (ti - offset - k * period).abs() < 1e-12).then_some((k as usize, i))
+        })
+        .collect()
+}
+
+#[test]
+fn unit_delay_and_discrete_tf_give_their_exact_sequences() {
+    let yaml = "simulation: { stop: 1.0, solver: { method: rk4, step: 0.01 } }\n\
+                blocks:\n  one: { type: constant, value: 1 }\n  c: { type: clock }\n\
+                \x20 zoh: { type: zero_order_hold, sample_time: 0.1 }\n\
+                \x20 delay: { type: unit_delay, initial: 5, sample_time: 0.1 }\n\
+                \x20 dtf: { type: discrete_transfer_function, num: [1], den: [1, -0.5], sample_time: 0.1 }\n\
+                wires: [c -> zoh, zoh -> delay, one -> dtf]\nrecord: [zoh, delay, dtf]\n";
+    let trace = run(yaml);
+    let (zoh, delay, dtf) = (
+        trace.column("zoh").unwrap(),
+        trace.column("delay").unwrap(),
+        trace.column("dtf").unwrap(),
+    );
+    let h = hits(trace.t(), 0.1, 0.0);
+    assert_eq!(h.len(), 11);
+    for &(k, i) in &h {
+        let expected_delay = if k == 0 { 5.0 } else { zoh[h[k - 1].1] };
+        assert_eq!(delay[i], expected_delay, "delay at k = {k}");
+        // 1/(z − 0.5) driven by ones: y(k) = 2(1 − 0.5^k), exact in binary.
+        assert_eq!(dtf[i], 2.0 * (1.0 - 0.5f64.powi(k as i32)), "dtf at k = {k}");
+    }
+}
+
+#[test]
+fn discrete_outputs_hold_between_hits_at_several_rates() {
+    let yaml = "simulation: { stop: 1.0, solver: { method: rk4, step: 0.01 } }\n\
+                blocks:\n  c: { type: clock }\n\
+                \x20 fast: { type: zero_order_hold, sample_time: 0.1 }\n\
+                \x20 slow: { type: zero_order_hold, sample_time: [0.25, 0.05] }\n\
+                wires: [c -> fast, c -> slow]\nrecord: [fast, slow]\n";
+    let trace = run(yaml);
+    let (fast, slow) = (trace.column("fast").unwrap(), trace.column("slow").unwrap());
+    for (i, &t) in trace.t().iter().enumerate() {
+        let last_fast = ((t + 1e-9) / 0.1).floor() * 0.1;
+        assert!((fast[i] - last_fast).abs() < 1e-12, "fast at t = {t}: {}", fast[i]);
+        // Before the first slow hit (t = 0.05) the output is 0.
+        let last_slow = if t < 0.05 - 1e-9 {
+            0.0
+        } else {
+            ((t - 0.05 + 1e-9) / 0.25).floor() * 0.25 + 0.05
+        };
+        assert!((slow[i] - last_slow).abs() < 1e-12, "slow at t = {t}: {}", slow[i]);
+    }
+}
+
+#[test]
+fn adaptive_solver_lands_exactly_on_every_hit() {
+    // Period 0.3 and offset 0.1 are not representable in binary; hits come
+    // from offset + k·period, and a major step must sit on each, bit for bit.
+    let yaml = "simulation: { stop: 3.0, solver: { method: dopri5, max_step: 0.07 } }\n\
+                blocks:\n  s: { type: sine, frequency: 0.7 }\n\
+                \x20 plant: { type: transfer_function, num: [1], den: [0.2, 1] }\n\
+                \x20 z: { type: zero_order_hold, sample_time: [0.3, 0.1] }\n\
+                wires: [s -> plant, plant -> z]\nrecord: [z, plant]\n";
+    let trace = run(yaml);
+    let t = trace.t();
+    for k in 0..10 {
+        let hit = 0.1 + k as f64 * 0.3;
+        let i = t.iter().position(|&x| x.to_bits() == hit.to_bits());
+        let i = i.unwrap_or_else(|| panic!("no major step at {hit}"));
+        // The hold samples the plant at exactly that instant.
+        assert_eq!(trace.column("z").unwrap()[i], trace.column("plant").unwrap()[i]);
+    }
+    assert_eq!(*t.last().unwrap(), 3.0);
+}
+
+#[test]
+fn hits_do_not_drift_over_a_million_ticks() {
+    // 1e6 steps at 1 µs: tick counting keeps the last hit at exactly 1e6·1e-6.
+    let yaml = "simulation: { stop: 1.0, solver: { method: euler, step: 1.0e-6 } }\n\
+                blocks:\n  c: { type: clock }\n  z: { type: zero_order_hold, sample_time: 1.0e-6 }\n\
+                wires: [c -> z]\nrecord: { every: 100000, signals: [z] }\n";
+    let trace = run(yaml);
+    assert_eq!(trace.t().len(), 11, "decimated to every 100000th step plus t = 0");
+    assert_eq!(*trace.t().last().unwrap(), 1.0);
+    assert!((trace.column("z").unwrap().last().unwrap() - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn discrete_pid_matches_a_hand_computed_sequence() {
+    // e = 1: u(k) = kp + T·ki·k + kd·N·(e − x_f(k)), backward-Euler filter
+    // with N·T = 1 gives a derivative part 2.5·0.5^k.
+    let yaml = "simulation: { stop: 1.0, solver: { method: rk4, step: 0.05 } }\n\
+                blocks:\n  e: { type: constant, value: 1 }\n\
+                \x20 pid: { type: pid, kp: 2, ki: 10, kd: 0.5, n: 10, sample_time: 0.1 }\n\
+                wires: [e -> pid]\nrecord: [pid]\n";
+    let trace = run(yaml);
+    let u = trace.column("pid").unwrap();
+    for (k, i) in hits(trace.t(), 0.1, 0.0) {
+        let expected = 2.0 + k as f64 + 2.5 * 0.5f64.powi(k as i32);
+        assert!((u[i] - expected).abs() < 1e-12, "k = {k}: {} vs {expected}", u[i]);
+    }
+}
+
+#[test]
+fn continuous_pid_matches_its_closed_form() {
+    // e = 1: u(t) = kp + ki·t + kd·N·e^{−N t}.
+    let yaml = "simulation: { stop: 1.0, solver: { method: rk4, step: 1.0e-3 } }\n\
+                blocks:\n  e: { type: constant, value: 1 }\n\
+                \x20 pid: { type: pid, kp: 2, ki: 10, kd: 0.5, n: 10 }\n\
+                wires: [e -> pid]\nrecord: [pid]\n";
+    let trace = run(yaml);
+    let err = max_error(&trace, "pid", |t| 2.0 + 10.0 * t + 5.0 * (-10.0 * t).exp());
+    assert!(err < 1e-9, "max error {err}");
+}
+
+fn windup_run(anti_windup: &str) -> ctlgraph::record::Trace {
+    let yaml = format!(
+        "simulation: {{ stop: 4.0, solver: {{ method: rk4, step: 1.0e-3 }} }}\n\
+         blocks:\n  e: {{ type: step, at: 2.0, initial: 1, value: -1 }}\n\
+         \x20 pid: {{ type: pid, kp: 0, ki: 1, upper: 0.5, lower: -10, anti_windup: {anti_windup} }}\n\
+         wires: [e -> pid]\nrecord: [pid]\n"
+    );
+    common::run(&yaml)
+}
+
+#[test]
+fn clamping_anti_windup_recovers_at_once() {
+    let trace = windup_run("clamping");
+    // Integrator stops at the limit; after e turns negative at t = 2 the
+    // output leaves the limit immediately: u = 0.5 − (t − 2). Without
+    // zero-crossing detection the fixed-step solver reaches the corner at
+    // t = 0.5 within one step (h = 1e-3), hence the O(h) bound.
+    let err = max_error(&trace, "pid", |t| {
+        if t < 0.5 {
+            t
+        } else if t <= 2.0 {
+            0.5
+        } else {
+            0.5 - (t - 2.0)
+        }
+    });
+    assert!(err < 1e-3, "max error {err}");
+}
+
+#[test]
+fn without_anti_windup_the_integrator_winds_up() {
+    let trace = windup_run("none");
+    // I(2) = 2, so the output stays at 0.5 until I falls to 0.5 at t = 3.5.
+    assert_eq!(trace.at("pid", 3.4).unwrap(), 0.5);
+    assert!((trace.at("pid", 3.9).unwrap() - 0.1).abs() < 1e-9);
+}
+
+#[test]
+fn limited_integrator_stops_at_its_limit_and_leaves_it_at_once() {
+    // The adaptive solver's error control resolves the corners at the limits.
+    let yaml = "simulation: { stop: 2.0, solver: { method: dopri5, rtol: 1.0e-10, atol: 1.0e-12 } }\n\
+                blocks:\n  u: { type: step, at: 1.0, initial: 1, value: -1 }\n\
+                \x20 i: { type: integrator, upper: 0.5, lower: -0.2 }\n\
+                wires: [u -> i]\nrecord: [i]\n";
+    let trace = run(yaml);
+    let err = max_error(&trace, "i", |t| {
+        if t < 0.5 {
+            t
+        } else if t <= 1.0 {
+            0.5
+        } else {
+            (1.5 - t).max(-0.2)
+        }
+    });
+    assert!(err < 1e-6, "max error {err}");
+    let i = trace.column("i").unwrap();
+    assert!(i.iter().all(|v| (-0.2..=0.5).contains(v)), "never beyond the limits");
+}
+
+#[test]
+fn rate_limiter_slews_a_step() {
+    let yaml = "simulation: { stop: 1.0, solver: { method: rk4, step: 1.0e-2 } }\n\
+                blocks:\n  u: { type: step, at: 0.2 }\n  rl: { type: rate_limiter, rising: 2, falling: -1 }\n\
+                wires: [u -> rl]\nrecord: [rl]\n";
+    let trace = run(yaml);
+    // Like Simulink, the limiter slews from its output at the previous major
+    // step (t = 0.19), so the ramp starts one step before the input's jump.
+    let err = max_error(
+        &trace,
+        "rl",
+        |t| if t < 0.2 { 0.0 } else { (2.0 * (t - 0.19)).min(1.0) },
+    );
+    assert!(err < 1e-12, "max error {err}");
+}
+
+#[test]
+fn pulse_edges_are_events() {
+    let yaml = "simulation: { stop: 1.0 }\n\
+                blocks:\n  p: { type: pulse, period: 0.3, duty: 0.25, delay: 0.1, amplitude: 2 }\n\
+                \x20 i: { type: integrator }\nwires: [p -> i]\nrecord: [p, i]\n";
+    let trace = run(yaml);
+    // The integral of the pulse is piecewise linear; exact with events.
+    let exact = |t: f64| {
+        let mut total: f64 = 0.0;
+        for k in 0..4 {
+            let rise = 0.1 + k as f64 * 0.3;
+            total += 2.0 * (t - rise).clamp(0.0, 0.075);
+        }
+        total
+    };
+    let err = max_error(&trace, "i", exact);
+    assert!(err < 1e-12, "max error {err}");
+}
