@@ -149,7 +149,11 @@ pub const TYPES: &[BlockType] = &[
         }],
         params: &[
             param("expr", None, "the formula, e.g. \"u1 * sin(2*pi*t)\""),
-            param("inputs", Some("1"), "number of input ports"),
+            param(
+                "inputs",
+                Some("1"),
+                "number of input ports (0: a function of time only)",
+            ),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_fcn,
@@ -422,7 +426,13 @@ impl Block for Fcn {
 }
 
 fn build_fcn(p: &mut Params) -> Result<Built, Diagnostic> {
-    let n = p.count_or("inputs", 1)?;
+    let n = p.number_where(
+        "inputs",
+        Some(1.0),
+        |v| v >= 0.0 && v.fract() == 0.0 && v < 1e4,
+        "a whole number",
+    )?;
+    let n = n as usize;
     let Some(src) = p.raw("expr") else {
         return Err(p.block_error("missing parameter `expr`"));
     };

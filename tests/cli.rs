@@ -1,0 +1,188 @@
+//! The command line as scripts see it: outputs, exit codes 0/1/2, messages
+//! on stderr, `--set`, determinism.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn ctlgraph(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ctlgraph"))
+        .args(args)
+        .env("CI", "1")
+        .output()
+        .expect("runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+const LAG: &str = "graphs/tutorial/first_order.yaml";
+
+#[test]
+fn run_writes_csv_plot_and_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, svg, json) = (
+        dir.path().join("y.csv"),
+        dir.path().join("y.svg"),
+        dir.path().join("r.json"),
+    );
+    let out = ctlgraph(&[
+        "run",
+        LAG,
+        "--out",
+        path(&csv),
+        "--plot",
+        path(&svg),
+        "--report",
+        path(&json),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let summary = text(&out.stdout);
+    assert!(
+        summary.contains("3000 steps, 3 s simulated in") && summary.contains("x real time"),
+        "{summary}"
+    );
+    let csv = std::fs::read_to_string(csv).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("t,u,y"));
+    assert_eq!(lines.count(), 3001);
+    let svg = std::fs::read_to_string(svg).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("First-order lag") && svg.contains("t [s]"));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    assert_eq!(report["solver"]["method"], "rk4");
+    assert_eq!(report["statistics"]["derivative_evaluations"], 12000);
+    assert_eq!(report["status"], "ok");
+    assert_eq!(report["graph"]["sha256"].as_str().unwrap().len(), 64);
+}
+
+#[test]
+fn csv_values_round_trip() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("y.csv");
+    assert!(ctlgraph(&["run", LAG, "--out", path(&csv)]).status.success());
+    let model = ctlgraph::compile_file(Path::new(LAG), &[]).unwrap();
+    let trace = ctlgraph::simulate(model, None).unwrap();
+    let text = std::fs::read_to_string(csv).unwrap();
+    for (row, line) in text.lines().skip(1).enumerate() {
+        for (col, cell) in line.split(',').enumerate() {
+            assert_eq!(
+                cell.parse::<f64>().unwrap().to_bits(),
+                trace.columns[col][row].to_bits()
+            );
+        }
+    }
+}
+
+#[test]
+fn runs_are_deterministic() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.csv"), dir.path().join("b.csv"));
+    for (file, graph) in [
+        (&a, "graphs/tutorial/multirate.yaml"),
+        (&b, "graphs/tutorial/multirate.yaml"),
+    ] {
+        assert!(ctlgraph(&["run", graph, "--out", path(file)]).status.success());
+    }
+    assert_eq!(std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+}
+
+#[test]
+fn set_overrides_a_parameter_and_rejects_unknown_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("y.csv");
+    let out = ctlgraph(&["run", LAG, "--set", "tau=1.0", "--stop-time", "1", "--out", path(&csv)]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let last = std::fs::read_to_string(&csv)
+        .unwrap()
+        .lines()
+        .last()
+        .unwrap()
+        .to_string();
+    let y: f64 = last.split(',').nth(2).unwrap().parse().unwrap();
+    assert!((y - (1.0 - (-1.0f64).exp())).abs() < 1e-9, "y(1) with tau = 1: {y}");
+
+    let out = ctlgraph(&["run", LAG, "--set", "tua=1.0"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("--set tua") && err.contains("did you mean `tau`?"),
+        "{err}"
+    );
+    let out = ctlgraph(&["run", LAG, "--set", "tau"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn invalid_graph_exits_2_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = dir.path().join("bad.yaml");
+    std::fs::write(&graph, "blocks:\n  u: { type: stp }\n").unwrap();
+    let csv = dir.path().join("y.csv");
+    let out = ctlgraph(&["run", path(&graph), "--out", path(&csv)]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = text(&out.stderr);
+    assert!(
+        err.starts_with(&format!(
+            "error: {}:2:14: block `u`: unknown block type `stp`",
+            graph.display()
+        )),
+        "{err}"
+    );
+    assert!(err.contains("did you mean `step`?"));
+    assert!(!csv.exists());
+    assert_eq!(ctlgraph(&["run", "no/such/file.yaml"]).status.code(), Some(2));
+}
+
+#[test]
+fn blow_up_exits_1_names_block_and_time_and_leaves_no_partial_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = dir.path().join("nan.yaml");
+    std::fs::write(
+        &graph,
+        "simulation: { stop: 1, solver: { method: rk4, step: 0.1 } }\nblocks:\n  one: { type: constant }\n  \
+         shifted: { type: fcn, inputs: 0, expr: \"t - 0.5\" }\n  d: { type: divide }\n\
+         wires: [one -> d.u1, shifted -> d.u2]\n",
+    )
+    .unwrap();
+    let csv = dir.path().join("y.csv");
+    let out = ctlgraph(&["run", path(&graph), "--out", path(&csv)]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(text(&out.stderr).trim(), "error: t = 0.5: block `d`: output `y` is inf");
+    assert!(!csv.exists(), "no half-written CSV");
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(leftovers.len(), 1, "only the graph remains: {leftovers:?}");
+}
+
+#[test]
+fn check_prints_the_execution_order() {
+    let out = ctlgraph(&["check", "graphs/tutorial/multirate.yaml"]);
+    assert!(out.status.success());
+    let s = text(&out.stdout);
+    let pos = |name: &str| {
+        s.find(&format!("  {name} "))
+            .unwrap_or_else(|| panic!("{name} missing in\n{s}"))
+    };
+    assert!(pos("plant") < pos("err") && pos("err") < pos("ctrl"), "{s}");
+    assert!(s.contains("discrete 0.001") && s.contains("discrete 0.02"), "{s}");
+}
+
+#[test]
+fn dot_and_blocks() {
+    let out = ctlgraph(&["dot", "graphs/tutorial/subsystem.yaml"]);
+    let s = text(&out.stdout);
+    assert!(out.status.success() && s.starts_with("digraph") && s.contains("cluster_") && s.contains("style=dashed"));
+    let s = text(&ctlgraph(&["blocks"]).stdout);
+    assert!(s.contains("transfer_function") && s.contains("pid") && s.contains("sources:"));
+    let s = text(&ctlgraph(&["blocks", "pid"]).stdout);
+    assert!(s.contains("anti_windup") && s.contains("default clamping"), "{s}");
+    let out = ctlgraph(&["blocks", "pdi"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("did you mean `pid`?"));
+}

@@ -1,0 +1,312 @@
+//! Every kind of mistake in a graph file gets `file:line:col: message`,
+//! names the block and key, and offers a hint where one helps.
+
+mod common;
+use common::error;
+
+/// Asserts position, a message fragment, and optionally a hint fragment.
+fn check(yaml: &str, line: u32, col: u32, message: &str, hint: Option<&str>) {
+    let d = error(yaml);
+    let pos = d.pos.clone().unwrap_or_else(|| panic!("no position in: {d}"));
+    assert_eq!((pos.line, pos.col), (line, col), "position of: {d}");
+    assert!(d.to_string().starts_with(&format!("test.yaml:{line}:{col}: ")), "{d}");
+    assert!(d.message.contains(message), "message `{}` lacks `{message}`", d.message);
+    if let Some(h) = hint {
+        let got = d.hint.clone().unwrap_or_default();
+        assert!(got.contains(h), "hint `{got}` lacks `{h}`");
+    }
+}
+
+const PLANT: &str = "  plant: { type: transfer_function, num: [1], den: [1, 1] }\n";
+
+#[test]
+fn unknown_block_type_suggests_the_closest() {
+    let yaml = "blocks:\n  p: { type: transfer_fuction, num: [1], den: [1, 1] }\n";
+    check(
+        yaml,
+        2,
+        14,
+        "block `p`: unknown block type `transfer_fuction`",
+        Some("did you mean `transfer_function`?"),
+    );
+}
+
+#[test]
+fn unknown_parameter_names_block_and_key() {
+    let yaml =
+        format!("blocks:\n  u: {{ type: step }}\n  g: {{ type: gain, gian: 2 }}\n{PLANT}wires: [u -> g, g -> plant]\n");
+    check(
+        &yaml,
+        3,
+        20,
+        "block `g` (gain): unknown parameter `gian`",
+        Some("gain takes: k, sample_time"),
+    );
+}
+
+#[test]
+fn missing_parameter() {
+    let yaml = "blocks:\n  u: { type: step }\n  plant: { type: transfer_function, num: [1] }\nwires: [u -> plant]\n";
+    check(
+        yaml,
+        3,
+        3,
+        "block `plant` (transfer_function): missing parameter `den`",
+        Some("ctlgraph blocks transfer_function"),
+    );
+}
+
+#[test]
+fn wrong_parameter_type_and_shape() {
+    let yaml = "blocks:\n  u: { type: step, at: [1, 2] }\n";
+    check(
+        yaml,
+        2,
+        24,
+        "block `u` (step): `at`: expected a number, found a list",
+        None,
+    );
+    let yaml = "blocks:\n  u: { type: step }\n  plant: { type: transfer_function, num: { a: 1 }, den: [1, 1] }\nwires: [u -> plant]\n";
+    check(yaml, 3, 42, "`num`: expected a list of numbers, found a mapping", None);
+    let yaml = "blocks:\n  s: { type: state_space, A: [[0, 1]], B: [[0], [1]], C: [[1, 0]] }\n";
+    check(yaml, 2, 30, "A must be square", None);
+}
+
+#[test]
+fn expression_errors_point_inside_the_string() {
+    let yaml = "parameters:\n  w0: 1000\n  b: \"3*w00\"\n";
+    check(
+        yaml,
+        3,
+        9,
+        "parameter `b`: unknown name `w00`",
+        Some("did you mean `w0`?"),
+    );
+    let yaml = "parameters:\n  k: 2\nblocks:\n  g: { type: constant, value: [1, \"k +\"] }\n";
+    check(
+        yaml,
+        4,
+        39,
+        "block `g` (constant): `value`: expression ends too early",
+        None,
+    );
+}
+
+#[test]
+fn duplicate_names() {
+    let yaml = "blocks:\n  u: { type: step }\n  u: { type: clock }\n";
+    check(yaml, 3, 3, "duplicate key `u`", None);
+}
+
+#[test]
+fn wire_to_a_missing_block_or_port() {
+    let yaml = format!("blocks:\n  u: {{ type: step }}\n{PLANT}wires:\n  - u -> plnt\n");
+    check(&yaml, 5, 10, "no block named `plnt`", Some("did you mean `plant`?"));
+    let yaml = format!("blocks:\n  u: {{ type: step }}\n{PLANT}wires:\n  - u.out -> plant\n");
+    check(&yaml, 5, 5, "block `u` (step) has no output `out`", Some("outputs: y"));
+    let yaml = "blocks:\n  u: { type: step }\n  e: { type: sum, signs: \"+-\" }\nwires:\n  - u -> e\n";
+    check(
+        yaml,
+        5,
+        10,
+        "has 2 inputs: name one as `e.PORT`",
+        Some("inputs: u1, u2"),
+    );
+}
+
+#[test]
+fn unwired_and_doubly_wired_inputs() {
+    let yaml = "blocks:\n  u: { type: step }\n  e: { type: sum, signs: \"+-\" }\nwires:\n  - u -> e.u1\n";
+    check(yaml, 3, 3, "input `u2` of block `e` is not wired", None);
+    let yaml = format!(
+        "blocks:\n  u: {{ type: step }}\n  v: {{ type: step }}\n{PLANT}wires:\n  - u -> plant\n  - v -> plant\n"
+    );
+    check(
+        &yaml,
+        7,
+        10,
+        "input `plant.u` is wired twice",
+        Some("already fed at line 6"),
+    );
+}
+
+#[test]
+fn width_mismatch() {
+    let yaml =
+        "blocks:\n  c: { type: constant, value: [1, 2, 3] }\n  m: { type: demux, outputs: 2 }\nwires:\n  - c -> m\n";
+    check(
+        yaml,
+        5,
+        10,
+        "width mismatch: `c.y` carries 3 value(s) but `m.u` takes 2",
+        Some("mux/demux/selector"),
+    );
+}
+
+#[test]
+fn improper_transfer_function() {
+    let yaml = "blocks:\n  u: { type: step }\n  d: { type: transfer_function, num: [1, 0, 0], den: [1, 1] }\nwires: [u -> d]\n";
+    check(
+        yaml,
+        3,
+        38,
+        "improper transfer function: numerator degree 2 exceeds denominator degree 1",
+        None,
+    );
+}
+
+#[test]
+fn bad_sample_time() {
+    let yaml = "blocks:\n  u: { type: step }\n  z: { type: unit_delay, sample_time: -2 }\nwires: [u -> z]\n";
+    check(yaml, 3, 39, "bad sample time", Some("0 = continuous"));
+    let yaml = "blocks:\n  u: { type: step }\n  z: { type: unit_delay, sample_time: [0.1, 0.2] }\nwires: [u -> z]\n";
+    check(yaml, 3, 39, "bad sample time [0.1, 0.2]", None);
+    let yaml = "blocks:\n  u: { type: step }\n  z: { type: unit_delay }\nwires: [u -> z]\n";
+    check(yaml, 3, 3, "missing parameter `sample_time`", None);
+}
+
+#[test]
+fn algebraic_loop_lists_the_cycle_in_order() {
+    let yaml = "blocks:\n  r: { type: step }\n  e: { type: sum, signs: \"+-\" }\n  k: { type: gain, k: 2 }\n\
+                \x20 f: { type: gain, k: 0.5 }\nwires: [r -> e.u1, e -> k, k -> f, f -> e.u2]\n";
+    let d = error(yaml);
+    assert_eq!(d.message, "algebraic loop: e -> k -> f -> e");
+    assert_eq!(d.pos.map(|p| (p.line, p.col)), Some((3, 3)));
+    assert!(d.hint.unwrap().contains("unit_delay"));
+    // The same loop through an integrator is legal.
+    let legal = yaml.replace("f: { type: gain, k: 0.5 }", "f: { type: integrator }");
+    assert!(ctlgraph::compile_str(&legal, "test.yaml", &[]).is_ok());
+}
+
+#[test]
+fn yaml_syntax_errors_are_positioned() {
+    let d = error("blocks:\n  u: { type: step\n  v: 3\n");
+    assert!(d.pos.is_some() && d.message.starts_with("YAML syntax"), "{d}");
+}
+
+#[test]
+fn structural_mistakes() {
+    check(
+        "blocks:\n  u: { type: step }\nwire: []\n",
+        3,
+        1,
+        "unknown top-level key `wire`",
+        Some("did you mean `wires`?"),
+    );
+    check(
+        "simulation: { solver: { method: rk5, step: 0.1 } }\n",
+        1,
+        33,
+        "unknown solver method `rk5`",
+        Some("rk4"),
+    );
+    check(
+        "simulation: { solver: rk4 }\n",
+        1,
+        23,
+        "the fixed-step method `rk4` needs a `step`",
+        None,
+    );
+    check("simulation: { stop: -1 }\n", 1, 21, "must be a positive number", None);
+    check(
+        "blocks:\n  u: { type: step }\nrecord: [u, u]\n",
+        3,
+        13,
+        "`u` is recorded twice",
+        None,
+    );
+    check(
+        "blocks:\n  u: { type: step }\nrecord: [v]\n",
+        3,
+        10,
+        "record: no block named `v`",
+        Some("did you mean `u`?"),
+    );
+}
+
+#[test]
+fn set_of_an_unknown_parameter() {
+    let yaml = "parameters: { tau: 1 }\nblocks:\n  u: { type: step }\n";
+    let sets = [("tua".to_string(), "2".to_string())];
+    let Err(d) = ctlgraph::compile_str(yaml, "test.yaml", &sets) else {
+        panic!("accepted --set tua")
+    };
+    assert_eq!(d.message, "--set tua: test.yaml has no parameter `tua`");
+    assert_eq!(d.hint.as_deref(), Some("did you mean `tau`?"));
+}
+
+#[test]
+fn subsystem_errors_name_the_file_they_are_in() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("inner.yaml"),
+        "parameters: { k: 1 }\nblocks:\n  x: { type: inport }\n  g: { type: gain, k: k, bogus: 1 }\n  y: { type: outport }\nwires: [x -> g, g -> y]\n",
+    )
+    .unwrap();
+    let outer = dir.path().join("outer.yaml");
+    std::fs::write(
+        &outer,
+        "blocks:\n  u: { type: step }\n  s: { type: subsystem, file: inner.yaml }\nwires: [u -> s]\n",
+    )
+    .unwrap();
+    let d = ctlgraph::compile_file(&outer, &[])
+        .err()
+        .expect("error inside the subsystem");
+    let pos = d.pos.clone().unwrap();
+    assert!(pos.file.ends_with("inner.yaml"), "{d}");
+    assert_eq!((pos.line, pos.col), (4, 26));
+    assert!(
+        d.message.contains("block `s/g` (gain): unknown parameter `bogus`"),
+        "{d}"
+    );
+
+    std::fs::write(&outer, "blocks:\n  u: { type: step }\n  s: { type: subsystem, file: inner.yaml, parameters: { kk: 2 } }\nwires: [u -> s]\n")
+        .unwrap();
+    let d = ctlgraph::compile_file(&outer, &[]).err().unwrap();
+    assert!(d.to_string().contains("outer.yaml:3:57: block `s` (subsystem)"), "{d}");
+    assert_eq!(d.hint.as_deref(), Some("did you mean `k`?"));
+
+    std::fs::write(
+        &outer,
+        "blocks:\n  u: { type: step }\n  s: { type: subsystem, file: missing.yaml }\nwires: [u -> s.z]\n",
+    )
+    .unwrap();
+    let d = ctlgraph::compile_file(&outer, &[]).err().unwrap();
+    assert!(
+        d.to_string()
+            .contains("outer.yaml:3:31: block `s` (subsystem): cannot read"),
+        "{d}"
+    );
+}
+
+#[test]
+fn nothing_a_user_writes_panics() {
+    // A grab bag of malformed inputs: every one must come back as an error.
+    let cases = [
+        "",
+        "[]",
+        "blocks: 3",
+        "blocks: { a: 3 }",
+        "blocks: { a: { type: 3 } }",
+        "wires: [3]",
+        "wires: [\"a -> \"]",
+        "record: { every: 0, signals: [] }",
+        "parameters: { a: [1] }",
+        "simulation: 5",
+        "blocks: { s: { type: selector, indices: [0] } }",
+        "blocks: { m: { type: mux, widths: [0] } }",
+        "blocks: { p: { type: pulse, duty: 1.5 } }",
+        "blocks: { l: { type: lookup_table_1d, x: [1, 1], y: [1, 2] } }",
+        "blocks: { f: { type: fcn, expr: \"u1 +* 2\" } }",
+        "blocks: { i: { type: inport } }",
+    ];
+    for yaml in cases {
+        let result = std::panic::catch_unwind(|| ctlgraph::compile_str(yaml, "test.yaml", &[]).err());
+        match result {
+            Ok(Some(_)) => {}
+            Ok(None) if yaml.is_empty() || yaml == "[]" => panic!("`{yaml}` accepted"),
+            Ok(None) => panic!("`{yaml}` accepted"),
+            Err(_) => panic!("`{yaml}` panicked"),
+        }
+    }
+}
