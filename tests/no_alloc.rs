@@ -1,0 +1,96 @@
+//! The step loop allocates nothing: a counting global allocator watches a
+//! compiled graph with a transfer function, a PID and discrete blocks step
+//! thousands of times, recorder included.
+
+use ctlgraph::record::Recorder;
+use ctlgraph_core::Simulator;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+struct Counting;
+
+thread_local! {
+    static ENABLED: Cell<bool> = const { Cell::new(false) };
+    static COUNT: Cell<usize> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        // `try_with`: thread-locals may be gone while a thread shuts down.
+        let _ = ENABLED.try_with(|on| {
+            if on.get() {
+                let _ = COUNT.try_with(|c| c.set(c.get() + 1));
+            }
+        });
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ENABLED.try_with(|on| {
+            if on.get() {
+                let _ = COUNT.try_with(|c| c.set(c.get() + 1));
+            }
+        });
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+const GRAPH: &str = "
+simulation: { stop: 1000.0, solver: SOLVER }
+blocks:
+  r:     { type: pulse, period: 0.5 }
+  e:     { type: sum, signs: \"+-\" }
+  pid:   { type: pid, kp: 2, ki: 5, kd: 0.05, n: 100, lower: -3, upper: 3 }
+  dpid:  { type: pid, kp: 1, ki: 2, sample_time: 1.0e-3 }
+  plant: { type: transfer_function, num: [100], den: [1, 10, 100] }
+  delay: { type: unit_delay, sample_time: 2.0e-3 }
+  dtf:   { type: discrete_transfer_function, num: [0.1], den: [1, -0.9], sample_time: 5.0e-3 }
+  f:     { type: fcn, inputs: 2, expr: \"u1 + 0.1*sin(u2)\" }
+  sat:   { type: saturation, lower: -2, upper: 2 }
+  rl:    { type: rate_limiter, rising: 50, falling: -50 }
+wires: [r -> e.u1, plant -> e.u2, e -> pid, pid -> f.u1, plant -> f.u2, f -> sat, sat -> rl, rl -> plant,
+        e -> dpid, plant -> delay, delay -> dtf]
+record: [r, y: plant, u: pid, dpid, dtf]
+";
+
+fn allocations_while_stepping(solver: &str, steps: usize) -> usize {
+    let yaml = GRAPH.replace("SOLVER", solver);
+    let model = ctlgraph::compile_str(&yaml, "alloc.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
+    let mut sim = Simulator::new(model, None);
+    let mut recorder = Recorder::new(sim.model());
+    let mut sum = 0.0;
+    let mut sink = |row: &[f64]| sum += row[1];
+    // Warm up once outside the counted region (lazy statics, first-step paths).
+    sim.outputs().unwrap();
+    sim.advance().unwrap();
+    ENABLED.with(|on| on.set(true));
+    for _ in 0..steps {
+        sim.outputs().unwrap();
+        recorder.sample(sim.time(), sim.signals(), &mut sink);
+        sim.advance().unwrap();
+    }
+    ENABLED.with(|on| on.set(false));
+    assert!(sim.time() > 1.0, "the run advanced: t = {}", sim.time());
+    assert!(sum.is_finite());
+    COUNT.with(|c| c.get())
+}
+
+#[test]
+fn stepping_allocates_nothing() {
+    assert_eq!(
+        allocations_while_stepping("{ method: rk4, step: 1.0e-4 }", 20_000),
+        0,
+        "rk4"
+    );
+    COUNT.with(|c| c.set(0));
+    assert_eq!(
+        allocations_while_stepping("{ method: dopri5, max_step: 1.0e-3 }", 5_000),
+        0,
+        "dopri5"
+    );
+}
