@@ -103,7 +103,7 @@ fn pid_loop_settles_without_steady_state_error() {
     );
     let u = trace.column("u").unwrap();
     assert!(u.iter().all(|v| v.abs() <= 5.0), "output limits hold");
-    assert!(u.iter().any(|v| *v == 5.0), "the limit is reached at the step");
+    assert!(u.contains(&5.0), "the limit is reached at the step");
 }
 
 #[test]
