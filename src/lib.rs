@@ -29,8 +29,13 @@ pub fn registry() -> Registry {
 /// Loads, expands and compiles a graph file. `sets` are `--set NAME=VALUE`
 /// parameter overrides.
 pub fn compile_file(path: &Path, sets: &[(String, String)]) -> Result<Model, Diagnostic> {
-    let flat = ctlgraph_core::load(path, sets)?;
-    ctlgraph_core::compile(&flat, &registry())
+    compile_file_with(path, sets, &registry())
+}
+
+/// Like [`compile_file`] with a registry of your own (the library's types
+/// plus custom blocks; see `examples/custom_block.rs`).
+pub fn compile_file_with(path: &Path, sets: &[(String, String)], registry: &Registry) -> Result<Model, Diagnostic> {
+    ctlgraph_core::compile(&ctlgraph_core::load(path, sets)?, registry)
 }
 
 /// Like [`compile_file`] for graph text in memory; `name` stands for the

@@ -1,0 +1,169 @@
+//! Every library block in a small graph, against values computed by hand.
+
+mod common;
+use common::{max_error, run};
+
+/// A graph on a fixed 0.01 s grid for 1 s with the given blocks and wires.
+fn graph(blocks: &str, wires: &str, record: &str) -> String {
+    format!(
+        "simulation: {{ stop: 1.0, solver: {{ method: rk4, step: 0.01 }} }}\nblocks:\n{blocks}wires: [{wires}]\nrecord: [{record}]\n"
+    )
+}
+
+#[test]
+fn sources() {
+    let yaml = graph(
+        "  c: { type: constant, value: 2.5 }\n  r: { type: ramp, slope: 2, start: 0.5, initial: 1 }\n\
+         \x20 s: { type: sine, amplitude: 2, frequency: 3, phase: 0.5, bias: 1 }\n  k: { type: clock }\n",
+        "",
+        "c, r, s, k",
+    );
+    let trace = run(&yaml);
+    assert_eq!(max_error(&trace, "c", |_| 2.5), 0.0);
+    assert!(max_error(&trace, "r", |t| if t > 0.5 { 1.0 + 2.0 * (t - 0.5) } else { 1.0 }) < 1e-12);
+    assert!(
+        max_error(&trace, "s", |t| 1.0
+            + 2.0 * (6.0 * std::f64::consts::PI * t + 0.5).sin())
+            < 1e-12
+    );
+    assert_eq!(max_error(&trace, "k", |t| t), 0.0);
+}
+
+#[test]
+fn elementwise_math_on_vectors_with_scalar_broadcast() {
+    let yaml = graph(
+        "  v: { type: constant, value: [1, -2, 3] }\n  w: { type: constant, value: [4, 5, -6] }\n\
+         \x20 two: { type: constant, value: 2 }\n\
+         \x20 g: { type: gain, k: [1, 10, 100] }\n  s: { type: sum, signs: \"+-+\" }\n\
+         \x20 p: { type: product, ops: \"**/\" }\n  d: { type: divide }\n  a: { type: abs }\n  sg: { type: sign }\n\
+         \x20 mn: { type: min }\n  mx: { type: max, inputs: 1 }\n  tot: { type: sum, signs: \"-\" }\n",
+        "v -> g, v -> s.u1, w -> s.u2, two -> s.u3, v -> p.u1, w -> p.u2, two -> p.u3, w -> d.u1, two -> d.u2, \
+         v -> a, v -> sg, v -> mn.u1, w -> mn.u2, w -> mx, w -> tot",
+        "g, s, p, d, a, sg, mn, mx, tot",
+    );
+    let trace = run(&yaml);
+    let row = |name: &str| -> Vec<f64> {
+        let cols: Vec<usize> = trace
+            .headers
+            .iter()
+            .enumerate()
+            .filter(|(_, h)| h.starts_with(&format!("{name}[")))
+            .map(|(i, _)| i)
+            .collect();
+        if cols.is_empty() {
+            return vec![*trace.column(name).unwrap().last().unwrap()];
+        }
+        cols.iter().map(|&c| *trace.columns[c].last().unwrap()).collect()
+    };
+    assert_eq!(row("g"), [1.0, -20.0, 300.0]);
+    assert_eq!(row("s"), [1.0 - 4.0 + 2.0, -2.0 - 5.0 + 2.0, 3.0 + 6.0 + 2.0]);
+    assert_eq!(row("p"), [2.0, -5.0, -9.0]);
+    assert_eq!(row("d"), [2.0, 2.5, -3.0]);
+    assert_eq!(row("a"), [1.0, 2.0, 3.0]);
+    assert_eq!(row("sg"), [1.0, -1.0, 1.0]);
+    assert_eq!(row("mn"), [1.0, -2.0, -6.0]);
+    assert_eq!(row("mx"), [5.0]);
+    assert_eq!(row("tot"), [-3.0]);
+    assert_eq!(trace.headers[1..4], ["g[1]", "g[2]", "g[3]"]);
+}
+
+#[test]
+fn matrix_gain_and_routing() {
+    let yaml = graph(
+        "  a: { type: constant, value: 1 }\n  b: { type: constant, value: [2, 3] }\n\
+         \x20 m: { type: mux, widths: [1, 2] }\n  k: { type: gain, k: [[1, 0, 0], [0, 1, 1]] }\n\
+         \x20 d: { type: demux, widths: [2, 1] }\n  sel: { type: selector, indices: [3, 1, 3] }\n\
+         \x20 c: { type: step, at: 0.5, initial: -1, value: 1 }\n  sw: { type: switch, threshold: 0 }\n",
+        "a -> m.u1, b -> m.u2, m -> k, m -> d, m -> sel, b -> sw.u1, c -> sw.control, sel -> sw.u2",
+        "k, d.y1, d.y2, sel, sw",
+    );
+    let err = common::error(&yaml);
+    assert!(
+        err.message.contains("width mismatch"),
+        "u2 of the switch is 3 wide: {err}"
+    );
+    let yaml = yaml.replace("sel -> sw.u2", "k -> sw.u2");
+    let trace = run(&yaml);
+    let last = |h: &str| *trace.column(h).unwrap().last().unwrap();
+    assert_eq!([last("k[1]"), last("k[2]")], [1.0, 5.0]);
+    assert_eq!([last("d.y1[1]"), last("d.y1[2]"), last("d.y2")], [1.0, 2.0, 3.0]);
+    assert_eq!([last("sel[1]"), last("sel[2]"), last("sel[3]")], [3.0, 1.0, 3.0]);
+    // Before 0.5 the control is -1 < 0: u2 (= k); from 0.5 on u1 (= b).
+    assert_eq!(trace.at("sw[2]", 0.25), Some(5.0));
+    assert_eq!(last("sw[2]"), 3.0);
+}
+
+#[test]
+fn static_nonlinearities_and_tables() {
+    let yaml = graph(
+        "  r: { type: ramp, slope: 4, initial: -2 }\n  dz: { type: dead_zone, start: -0.5, end: 1 }\n\
+         \x20 lut: { type: lookup_table_1d, x: [-1, 0, 1], y: [2, 0, 4] }\n\
+         \x20 lin: { type: lookup_table_1d, x: [-1, 0, 1], y: [2, 0, 4], extrapolation: linear }\n\
+         \x20 f: { type: fcn, inputs: 2, expr: \"u1^2 + max(u2, 0) + t\" }\n  one: { type: constant, value: 1 }\n",
+        "r -> dz, r -> lut, r -> lin, r -> f.u1, one -> f.u2",
+        "r, dz, lut, lin, f",
+    );
+    let trace = run(&yaml);
+    let u = |t: f64| -2.0 + 4.0 * t;
+    assert!(
+        max_error(&trace, "dz", |t| if u(t) > 1.0 {
+            u(t) - 1.0
+        } else if u(t) < -0.5 {
+            u(t) + 0.5
+        } else {
+            0.0
+        }) < 1e-12
+    );
+    let table = |x: f64| if x < 0.0 { -2.0 * x } else { 4.0 * x };
+    assert!(max_error(&trace, "lut", |t| table(u(t).clamp(-1.0, 1.0))) < 1e-12);
+    assert!(max_error(&trace, "lin", |t| table(u(t))) < 1e-12);
+    assert!(max_error(&trace, "f", |t| u(t).powi(2) + 1.0 + t) < 1e-12);
+}
+
+#[test]
+fn filtered_derivative_of_a_ramp() {
+    // s/(τs + 1) of a ramp of slope 3: y = 3(1 − e^{−t/τ}).
+    let yaml = "simulation: { stop: 0.5, solver: { method: rk4, step: 1.0e-4 } }\n\
+                blocks:\n  r: { type: ramp, slope: 3 }\n  d: { type: derivative, tau: 0.01 }\n\
+                wires: [r -> d]\nrecord: [d]\n";
+    let trace = run(yaml);
+    assert!(max_error(&trace, "d", |t| 3.0 * (1.0 - (-t / 0.01).exp())) < 1e-9);
+}
+
+#[test]
+fn integrator_on_a_vector_signal() {
+    let yaml = "simulation: { stop: 1.0, solver: { method: rk4, step: 0.01 } }\n\
+                blocks:\n  c: { type: constant, value: [1, -2] }\n  i: { type: integrator, initial: [0, 5] }\n\
+                wires: [c -> i]\nrecord: [i]\n";
+    let trace = run(yaml);
+    assert!(max_error(&trace, "i[1]", |t| t) < 1e-12);
+    assert!(max_error(&trace, "i[2]", |t| 5.0 - 2.0 * t) < 1e-12);
+}
+
+#[test]
+fn from_csv_interpolates_a_time_series() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("data.csv"), "t,force\n0,0\n0.5,1\n0.5,3\n1,2\n").unwrap();
+    let graph_file = dir.path().join("g.yaml");
+    std::fs::write(
+        &graph_file,
+        "simulation: { stop: 1.5, solver: { method: rk4, step: 0.05 } }\n\
+         blocks:\n  f: { type: from_csv, file: data.csv, column: force }\n\
+         \x20 z: { type: from_csv, file: data.csv, column: force, extrapolation: zero }\nrecord: [f, z]\n",
+    )
+    .unwrap();
+    let model = ctlgraph::compile_file(&graph_file, &[]).unwrap();
+    let trace = ctlgraph::simulate(model, None).unwrap();
+    assert_eq!(trace.at("f", 0.25), Some(0.5));
+    assert_eq!(trace.at("f", 0.75), Some(2.5));
+    assert_eq!(*trace.column("f").unwrap().last().unwrap(), 2.0, "held after the data");
+    assert_eq!(*trace.column("z").unwrap().last().unwrap(), 0.0, "zero after the data");
+
+    std::fs::write(
+        &graph_file,
+        "blocks:\n  f: { type: from_csv, file: data.csv, column: forse }\n",
+    )
+    .unwrap();
+    let d = ctlgraph::compile_file(&graph_file, &[]).err().unwrap();
+    assert!(d.message.contains("has no column `forse` (columns: t, force)"), "{d}");
+}
