@@ -39,6 +39,16 @@ pub struct BlockMeta {
     pub output_names: Vec<String>,
 }
 
+/// The part of [`BlockMeta`] the step loop reads, kept compact and
+/// contiguous so stepping touches little memory.
+#[derive(Clone, Debug)]
+pub(crate) struct Slot {
+    pub rate: Rate,
+    pub states: Range<usize>,
+    pub inputs: Range<usize>,
+    pub outputs: Range<usize>,
+}
+
 /// A recorded signal: its column name and where it lives.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Column {
@@ -61,6 +71,7 @@ pub struct Edge {
 pub struct Model {
     pub(crate) blocks: Vec<Box<dyn Block>>,
     pub meta: Vec<BlockMeta>,
+    pub(crate) slots: Vec<Slot>,
     pub(crate) in_ports: Vec<Port>,
     pub(crate) out_ports: Vec<Port>,
     pub signal_len: usize,
@@ -178,9 +189,19 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         }
     }
     let columns = record_columns(g, &nodes, &index, &direct, &out_offset)?;
+    let slots = meta
+        .iter()
+        .map(|m| Slot {
+            rate: m.rate,
+            states: m.states.clone(),
+            inputs: m.inputs.clone(),
+            outputs: m.outputs.clone(),
+        })
+        .collect();
     Ok(Model {
         blocks: model_blocks,
         meta,
+        slots,
         in_ports,
         out_ports,
         signal_len,

@@ -10,7 +10,7 @@
 //! allocates nothing.
 
 use crate::block::{Io, Port};
-use crate::compile::{BlockMeta, Model, Rate};
+use crate::compile::{Model, Rate, Slot};
 use ctlgraph_solver::{Integrator, Method, OdeSystem, SolverError, Stats};
 use std::fmt;
 
@@ -81,6 +81,8 @@ pub struct Simulator {
     /// Times closer than this are the same major step.
     tol: f64,
     first: bool,
+    /// Earliest block event after `t` (see [`Simulator::earliest_event`]).
+    next_event: f64,
     major_steps: u64,
     /// Blocks evaluated in minor steps (continuous rate), execution order.
     continuous: Vec<usize>,
@@ -128,6 +130,7 @@ impl Simulator {
             stop,
             tol: 1e-9 * smallest,
             first: true,
+            next_event: f64::INFINITY,
             major_steps: 0,
             continuous,
             stateful,
@@ -144,13 +147,14 @@ impl Simulator {
         self.major_steps = 0;
         self.grid_tick = 1;
         self.signals.iter_mut().for_each(|s| *s = 0.0);
-        for (b, m) in self.model.blocks.iter_mut().zip(&self.model.meta) {
+        for (b, m) in self.model.blocks.iter_mut().zip(&self.model.slots) {
             b.initialize(&mut self.x[m.states.clone()]);
         }
         for c in &mut self.clocks {
             c.tick = 0;
         }
         self.mark_hits();
+        self.next_event = self.earliest_event();
         self.integ = Integrator::new(self.model.sim.method, self.model.n_states);
     }
 
@@ -209,7 +213,7 @@ impl Simulator {
     pub fn outputs(&mut self) -> Result<(), SimError> {
         let m = &mut self.model;
         for (i, block) in m.blocks.iter_mut().enumerate() {
-            let meta = &m.meta[i];
+            let meta = &m.slots[i];
             let runs = match meta.rate {
                 Rate::Continuous => true,
                 Rate::Constant => self.first,
@@ -249,7 +253,7 @@ impl Simulator {
     pub fn advance(&mut self) -> Result<(), SimError> {
         let m = &mut self.model;
         for (i, block) in m.blocks.iter_mut().enumerate() {
-            let meta = &m.meta[i];
+            let meta = &m.slots[i];
             let runs = match meta.rate {
                 Rate::Continuous => true,
                 Rate::Constant => false,
@@ -299,15 +303,14 @@ impl Simulator {
         }
         let mut clamped = false;
         for &i in &self.stateful {
-            let meta = &self.model.meta[i];
+            let meta = &self.model.slots[i];
             clamped |= self.model.blocks[i].clamp_states(&mut self.x[meta.states.clone()]);
         }
         let hit = self.mark_hits();
-        let event = self
-            .model
-            .blocks
-            .iter()
-            .any(|b| (b.next_event(self.t - 2.0 * self.tol) - self.t).abs() <= self.tol);
+        let event = self.t >= self.next_event - self.tol;
+        if event {
+            self.next_event = self.earliest_event();
+        }
         if hit || event || clamped {
             self.integ.invalidate();
         }
@@ -340,11 +343,21 @@ impl Simulator {
         if self.grid_step > 0.0 {
             next = next.min(self.grid_tick as f64 * self.grid_step);
         }
-        let mut event = f64::INFINITY;
-        for b in &self.model.blocks {
-            event = event.min(b.next_event(self.t));
+        if self.next_event <= next + self.tol {
+            self.next_event
+        } else {
+            next
         }
-        if event <= next + self.tol { event } else { next }
+    }
+
+    /// The first block event strictly after the current time. Cached in
+    /// `next_event` and recomputed only when time reaches it.
+    fn earliest_event(&self) -> f64 {
+        self.model
+            .blocks
+            .iter()
+            .map(|b| b.next_event(self.t))
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Runs to the stop time, handing the signals to `sink` at every major
@@ -362,7 +375,7 @@ impl Simulator {
 }
 
 fn io_for<'a>(
-    meta: &BlockMeta,
+    meta: &Slot,
     t: f64,
     left_limit: bool,
     x: &'a [f64],
@@ -395,12 +408,12 @@ impl OdeSystem for Minor<'_> {
         let m = &mut *self.model;
         let left = t >= self.t_end;
         for &i in self.continuous {
-            let meta = &m.meta[i];
+            let meta = &m.slots[i];
             let mut io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports);
             m.blocks[i].output(&mut io);
         }
         for &i in self.stateful {
-            let meta = &m.meta[i];
+            let meta = &m.slots[i];
             let io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports);
             m.blocks[i].derivatives(&io, &mut dx[meta.states.clone()]);
         }
