@@ -297,8 +297,13 @@ fn run(
             .map_err(|e| Failure::Run(format!("cannot write {}: {e}", path.display())))?;
     }
     let simulated = sim.time();
+    let wall_text = if wall < 1.0 {
+        format!("{:.2} ms", wall * 1e3)
+    } else {
+        format!("{wall:.3} s")
+    };
     println!(
-        "{}: {} steps, {simulated} s simulated in {wall:.3} s wall ({:.1}x real time)",
+        "{}: {} steps, {simulated} s simulated in {wall_text} wall ({:.1}x real time)",
         graph.display(),
         sim.stats().major_steps,
         simulated / wall.max(1e-9)

@@ -113,6 +113,7 @@ pub struct CsvFile {
 
 impl CsvFile {
     pub fn create(dest: &Path, headers: &[String]) -> std::io::Result<Self> {
+        create_parent(dest)?;
         let name = dest
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -182,8 +183,17 @@ fn quote(s: &str) -> String {
     }
 }
 
+/// Creates the folder an output file goes into, if missing.
+fn create_parent(dest: &Path) -> std::io::Result<()> {
+    match dest.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => std::fs::create_dir_all(dir),
+        _ => Ok(()),
+    }
+}
+
 /// Writes a whole file atomically (temporary name, then rename).
 pub fn write_atomic(dest: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    create_parent(dest)?;
     let name = dest
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
