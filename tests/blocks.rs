@@ -167,3 +167,19 @@ fn from_csv_interpolates_a_time_series() {
     let d = ctlgraph::compile_file(&graph_file, &[]).err().unwrap();
     assert!(d.message.contains("has no column `forse` (columns: t, force)"), "{d}");
 }
+
+#[test]
+fn pid_gains_from_input_ports() {
+    // kp arrives on a port and doubles at t = 0.5; ki on a port too. With
+    // e = 1: u = kp(t) + ∫ki dt, and the integral does not jump when ki does.
+    let yaml = graph(
+        "  e: { type: constant, value: 1 }\n  kp: { type: step, at: 0.5, initial: 1, value: 2 }\n\
+         \x20 ki: { type: step, at: 0.5, initial: 4, value: 0 }\n\
+         \x20 pid: { type: pid, gain_inputs: [kp, ki], kp: 100, ki: 100 }\n",
+        "e -> pid.e, kp -> pid.kp, ki -> pid.ki",
+        "pid",
+    );
+    let trace = run(&yaml);
+    let err = max_error(&trace, "pid", |t| if t < 0.5 { 1.0 + 4.0 * t } else { 2.0 + 2.0 });
+    assert!(err < 1e-12, "max error {err}");
+}

@@ -77,7 +77,12 @@ impl Table {
                 y.len()
             ));
         }
-        if let Some(i) = x.windows(2).position(|w| w[1] < w[0] || !w[0].is_finite()) {
+        if let Some(v) = x.iter().chain(&y).find(|v| !v.is_finite()) {
+            return Err(format!(
+                "{v} in the data: every breakpoint and value must be a finite number"
+            ));
+        }
+        if let Some(i) = x.windows(2).position(|w| w[1] < w[0]) {
             return Err(format!("breakpoints must increase: {} then {}", x[i], x[i + 1]));
         }
         if x[0] == x[x.len() - 1] {

@@ -1,0 +1,253 @@
+//! From a flat graph to a runnable [`Model`]: build the blocks through the
+//! registry, connect the wires (looking through subsystem ports), resolve
+//! widths and rates, sort by direct-feedthrough edges and lay out one flat
+//! signal buffer with every input resolved to an index.
+
+mod schedule;
+mod wiring;
+
+use crate::block::{Block, Interface, Port, SampleTime, Width};
+use crate::diag::{Diagnostic, Pos};
+use crate::flatten::{FlatBlock, FlatGraph, SimConfig};
+use crate::registry::Registry;
+use schedule::{resolve_rates, sort};
+use std::collections::HashMap;
+use std::ops::Range;
+use wiring::{connect, instantiate, record_columns, resolve_drivers, resolve_widths};
+
+/// When a compiled block runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rate {
+    Constant,
+    Continuous,
+    /// Index into [`Model::clocks`].
+    Discrete(usize),
+}
+
+/// What the simulator and the tools need to know of a block.
+#[derive(Clone, Debug)]
+pub struct BlockMeta {
+    pub name: String,
+    pub type_name: String,
+    pub pos: Pos,
+    pub rate: Rate,
+    /// The sample time after inheritance is resolved.
+    pub sample_time: SampleTime,
+    pub inputs: Range<usize>,
+    pub outputs: Range<usize>,
+    pub states: Range<usize>,
+    pub input_names: Vec<String>,
+    pub output_names: Vec<String>,
+}
+
+/// The part of [`BlockMeta`] the step loop reads, kept compact and
+/// contiguous so stepping touches little memory.
+#[derive(Clone, Debug)]
+pub(crate) struct Slot {
+    pub rate: Rate,
+    pub states: Range<usize>,
+    pub inputs: Range<usize>,
+    pub outputs: Range<usize>,
+}
+
+/// A recorded signal: its column name and where it lives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Column {
+    pub name: String,
+    pub offset: usize,
+    pub width: usize,
+}
+
+/// A wire as drawn, for `ctlgraph dot`: (source block, port) → (dest block, port).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Edge {
+    pub src: usize,
+    pub src_port: usize,
+    pub dst: usize,
+    pub dst_port: usize,
+    pub feedthrough: bool,
+}
+
+/// A compiled graph, blocks in execution order.
+pub struct Model {
+    pub(crate) blocks: Vec<Box<dyn Block>>,
+    pub meta: Vec<BlockMeta>,
+    pub(crate) slots: Vec<Slot>,
+    pub(crate) in_ports: Vec<Port>,
+    pub(crate) out_ports: Vec<Port>,
+    pub signal_len: usize,
+    pub n_states: usize,
+    /// Distinct discrete sample times as (period, offset).
+    pub clocks: Vec<(f64, f64)>,
+    pub columns: Vec<Column>,
+    pub record_every: usize,
+    pub edges: Vec<Edge>,
+    pub sim: SimConfig,
+    pub name: Option<String>,
+    pub file: std::sync::Arc<str>,
+}
+
+struct Node<'g> {
+    flat: &'g FlatBlock,
+    iface: Interface,
+    block: Option<Box<dyn Block>>,
+    is_virtual: bool,
+    width: Option<usize>,
+}
+
+/// Where a real input gets its value: a real block's output port, and the
+/// position of the wire that delivers it.
+#[derive(Clone)]
+struct Driver {
+    src: usize,
+    port: usize,
+    pos: Pos,
+}
+
+/// Compiles a flat graph with the block types of `reg`.
+pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
+    let mut nodes = instantiate(g, reg)?;
+    let index: HashMap<&str, usize> = nodes
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (n.flat.path.as_str(), i))
+        .collect();
+    let direct = connect(g, &nodes, &index)?;
+    let drivers = resolve_drivers(&nodes, &direct)?;
+    resolve_widths(&mut nodes, &drivers)?;
+    let order = sort(&nodes, &drivers)?;
+    let (rates, clocks) = resolve_rates(&nodes, &drivers, &order);
+
+    // Lay out outputs, then point every input at its driver's output.
+    let mut out_offset: HashMap<(usize, usize), Port> = HashMap::new();
+    let mut signal_len = 0;
+    for &i in &order {
+        for (p, port) in nodes[i].iface.outputs.iter().enumerate() {
+            let width = resolved(port.width, nodes[i].width);
+            out_offset.insert(
+                (i, p),
+                Port {
+                    offset: signal_len,
+                    width,
+                },
+            );
+            signal_len += width;
+        }
+    }
+    let mut model_blocks = Vec::with_capacity(order.len());
+    let mut meta = Vec::with_capacity(order.len());
+    let (mut in_ports, mut out_ports) = (Vec::new(), Vec::new());
+    let mut n_states = 0;
+    let position: HashMap<usize, usize> = order.iter().enumerate().map(|(k, &i)| (i, k)).collect();
+    for &i in &order {
+        let node = &mut nodes[i];
+        let block = node
+            .block
+            .take()
+            .ok_or_else(|| Diagnostic::plain("internal: block built twice"))?;
+        let in_start = in_ports.len();
+        for d in &drivers[i] {
+            in_ports.push(out_offset[&(d.src, d.port)]);
+        }
+        let out_start = out_ports.len();
+        for p in 0..node.iface.outputs.len() {
+            out_ports.push(out_offset[&(i, p)]);
+        }
+        let ns = block.num_states();
+        let rate = rates[&i];
+        meta.push(BlockMeta {
+            name: node.flat.path.clone(),
+            type_name: node.flat.spec.type_name.clone(),
+            pos: node.flat.spec.pos.clone(),
+            rate,
+            sample_time: match rate {
+                Rate::Constant => SampleTime::Constant,
+                Rate::Continuous => SampleTime::Continuous,
+                Rate::Discrete(c) => SampleTime::Discrete {
+                    period: clocks[c].0,
+                    offset: clocks[c].1,
+                },
+            },
+            inputs: in_start..in_ports.len(),
+            outputs: out_start..out_ports.len(),
+            states: n_states..n_states + ns,
+            input_names: node.iface.inputs.iter().map(|p| p.name.clone()).collect(),
+            output_names: node.iface.outputs.iter().map(|p| p.name.clone()).collect(),
+        });
+        n_states += ns;
+        model_blocks.push(block);
+    }
+    let mut edges = Vec::new();
+    for &i in &order {
+        for (p, d) in drivers[i].iter().enumerate() {
+            edges.push(Edge {
+                src: position[&d.src],
+                src_port: d.port,
+                dst: position[&i],
+                dst_port: p,
+                feedthrough: nodes[i].iface.inputs[p].feedthrough,
+            });
+        }
+    }
+    let columns = record_columns(g, &nodes, &index, &direct, &out_offset)?;
+    let slots = meta
+        .iter()
+        .map(|m| Slot {
+            rate: m.rate,
+            states: m.states.clone(),
+            inputs: m.inputs.clone(),
+            outputs: m.outputs.clone(),
+        })
+        .collect();
+    Ok(Model {
+        blocks: model_blocks,
+        meta,
+        slots,
+        in_ports,
+        out_ports,
+        signal_len,
+        n_states,
+        clocks,
+        columns,
+        record_every: g.record_every,
+        edges,
+        sim: g.sim.clone(),
+        name: g.name.clone(),
+        file: g.file.clone(),
+    })
+}
+
+fn resolved(w: Width, common: Option<usize>) -> usize {
+    match w {
+        Width::Fixed(n) => n,
+        Width::Common => common.unwrap_or(1),
+    }
+}
+
+impl Model {
+    /// Column headers: `t`, then each recorded name (`name[k]`, 1-based, for
+    /// vector signals).
+    pub fn headers(&self) -> Vec<String> {
+        let mut h = vec!["t".to_string()];
+        for c in &self.columns {
+            if c.width == 1 {
+                h.push(c.name.clone());
+            } else {
+                h.extend((1..=c.width).map(|k| format!("{}[{k}]", c.name)));
+            }
+        }
+        h
+    }
+
+    /// The block owning signal `offset` and the name of its output port.
+    pub fn signal_owner(&self, offset: usize) -> Option<(&BlockMeta, &str)> {
+        self.meta.iter().find_map(|m| {
+            m.outputs.clone().find_map(|p| {
+                let port = self.out_ports[p];
+                (port.offset..port.offset + port.width)
+                    .contains(&offset)
+                    .then(|| (m, m.output_names[p - m.outputs.start].as_str()))
+            })
+        })
+    }
+}

@@ -1,0 +1,147 @@
+//! Execution order and rates: a topological sort over direct-feedthrough
+//! edges (algebraic loops reported from strongly connected components) and
+//! inherited sample times resolved along that order.
+
+use super::{Driver, Node, Rate};
+use crate::block::SampleTime;
+use crate::diag::Diagnostic;
+use petgraph::graph::{DiGraph, NodeIndex};
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, HashMap};
+
+/// Execution order: a topological order of the direct-feedthrough edges,
+/// ties broken by declaration order so listings read like the file.
+pub(super) fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>, Diagnostic> {
+    let mut graph = DiGraph::<usize, ()>::new();
+    let ids: Vec<NodeIndex> = (0..nodes.len()).map(|i| graph.add_node(i)).collect();
+    for (i, ds) in drivers.iter().enumerate() {
+        for (p, d) in ds.iter().enumerate() {
+            if nodes[i].iface.inputs[p].feedthrough {
+                graph.update_edge(ids[d.src], ids[i], ());
+            }
+        }
+    }
+    let mut indegree: Vec<usize> = ids
+        .iter()
+        .map(|&n| graph.neighbors_directed(n, petgraph::Direction::Incoming).count())
+        .collect();
+    let mut ready: BinaryHeap<Reverse<usize>> = (0..nodes.len())
+        .filter(|&i| indegree[i] == 0 && !nodes[i].is_virtual)
+        .map(Reverse)
+        .collect();
+    let mut order = Vec::with_capacity(nodes.len());
+    while let Some(Reverse(i)) = ready.pop() {
+        order.push(i);
+        for next in graph.neighbors(ids[i]) {
+            let j = graph[next];
+            indegree[j] -= 1;
+            if indegree[j] == 0 {
+                ready.push(Reverse(j));
+            }
+        }
+    }
+    let real = nodes.iter().filter(|n| !n.is_virtual).count();
+    if order.len() == real {
+        return Ok(order);
+    }
+    // Every strongly connected component with a cycle is an algebraic loop.
+    let mut loops = Vec::new();
+    for scc in petgraph::algo::tarjan_scc(&graph) {
+        let first = scc.iter().map(|&n| graph[n]).min().unwrap_or(0);
+        let self_loop = scc.len() == 1 && graph.contains_edge(scc[0], scc[0]);
+        if scc.len() > 1 || self_loop {
+            let cycle = cycle_through(&graph, ids[first], &scc);
+            loops.push(
+                cycle
+                    .iter()
+                    .map(|&n| nodes[graph[n]].flat.path.as_str())
+                    .collect::<Vec<_>>(),
+            );
+        }
+    }
+    loops.sort();
+    let first_block = loops.first().and_then(|l| l.first()).copied().unwrap_or("");
+    let pos = nodes
+        .iter()
+        .find(|n| n.flat.path == first_block)
+        .map(|n| n.flat.spec.pos.clone());
+    let text: Vec<String> = loops
+        .iter()
+        .map(|l| format!("{} -> {}", l.join(" -> "), l[0]))
+        .collect();
+    let message = format!("algebraic loop: {}", text.join("; "));
+    let hint = "every block on the loop has direct feedthrough; break it with a block that has none \
+                (unit_delay, integrator, a strictly proper transfer_function, an observer)";
+    Err(match pos {
+        Some(p) => Diagnostic::at(&p, message),
+        None => Diagnostic::plain(message),
+    }
+    .with_hint(hint))
+}
+
+/// A simple cycle from `start` back to itself inside one component.
+fn cycle_through(graph: &DiGraph<usize, ()>, start: NodeIndex, scc: &[NodeIndex]) -> Vec<NodeIndex> {
+    let mut parent: HashMap<NodeIndex, NodeIndex> = HashMap::new();
+    let mut queue = std::collections::VecDeque::from([start]);
+    while let Some(n) = queue.pop_front() {
+        let mut succ: Vec<NodeIndex> = graph.neighbors(n).filter(|s| scc.contains(s)).collect();
+        succ.sort_by_key(|s| graph[*s]);
+        for s in succ {
+            if s == start {
+                let mut path = vec![n];
+                while let Some(&p) = parent.get(path.last().unwrap_or(&start)) {
+                    path.push(p);
+                }
+                path.reverse();
+                return path;
+            }
+            if let std::collections::hash_map::Entry::Vacant(e) = parent.entry(s) {
+                e.insert(n);
+                queue.push_back(s);
+            }
+        }
+    }
+    vec![start]
+}
+
+/// Sample times after inheritance: an inherited block runs at the rate of
+/// its drivers if they agree (constants aside), continuously otherwise.
+pub(super) fn resolve_rates(
+    nodes: &[Node],
+    drivers: &[Vec<Driver>],
+    order: &[usize],
+) -> (HashMap<usize, Rate>, Vec<(f64, f64)>) {
+    let mut clocks: Vec<(f64, f64)> = Vec::new();
+    let mut rates: HashMap<usize, Rate> = HashMap::new();
+    let mut clock = |period: f64, offset: f64| match clocks.iter().position(|&c| c == (period, offset)) {
+        Some(c) => c,
+        None => {
+            clocks.push((period, offset));
+            clocks.len() - 1
+        }
+    };
+    for &i in order {
+        let has_states = nodes[i].block.as_ref().is_some_and(|b| b.num_states() > 0);
+        let rate = match nodes[i].iface.sample_time {
+            _ if has_states => Rate::Continuous,
+            SampleTime::Continuous => Rate::Continuous,
+            SampleTime::Constant => Rate::Constant,
+            SampleTime::Discrete { period, offset } => Rate::Discrete(clock(period, offset)),
+            SampleTime::Inherited => {
+                let mut acc = Rate::Constant;
+                for d in &drivers[i] {
+                    let r = rates.get(&d.src).copied().unwrap_or(Rate::Continuous);
+                    acc = match (acc, r) {
+                        (a, Rate::Constant) => a,
+                        (Rate::Constant, r) => r,
+                        (a, r) if a == r => a,
+                        _ => Rate::Continuous,
+                    };
+                }
+                acc
+            }
+        };
+        rates.insert(i, rate);
+    }
+    (rates, clocks)
+}
