@@ -83,12 +83,7 @@ fn graph(sim: &mut Simulator) -> f64 {
 
 fn bench(c: &mut Criterion) {
     let model = ctlgraph::compile_str(GRAPH, "bench.yaml", &[]).expect("graph compiles");
-    let plant = model
-        .columns
-        .iter()
-        .find(|c| c.name == "plant")
-        .expect("plant recorded")
-        .offset;
+    let plant = model.columns.iter().find(|c| c.name == "plant").expect("plant recorded").offset;
     let mut sim = Simulator::new(model, None);
     // Same equations, same integrator: the two agree before they are timed.
     graph(&mut sim);

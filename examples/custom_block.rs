@@ -43,19 +43,8 @@ fn build_relay(p: &mut Params) -> Result<Built, Diagnostic> {
     let (high, low) = (p.number_or("high", 1.0)?, p.number_or("low", -1.0)?);
     // Output depends only on the stored state: no direct feedthrough, so a
     // relay closes a loop without an algebraic loop.
-    let iface = Interface::new(SampleTime::Continuous)
-        .input("u", Width::Fixed(1), false)
-        .output("y", Width::Fixed(1));
-    Ok(Built::new(
-        Relay {
-            on,
-            off,
-            high,
-            low,
-            state: false,
-        },
-        iface,
-    ))
+    let iface = Interface::new(SampleTime::Continuous).input("u", Width::Fixed(1), false).output("y", Width::Fixed(1));
+    Ok(Built::new(Relay { on, off, high, low, state: false }, iface))
 }
 
 const RELAY: BlockType = BlockType {
@@ -63,35 +52,13 @@ const RELAY: BlockType = BlockType {
     category: "nonlinear",
     summary: "On/off relay with hysteresis.",
     doc: "y = high after u >= on, y = low after u <= off; state changes at major steps.",
-    inputs: &[PortDoc {
-        name: "u",
-        doc: "scalar",
-    }],
-    outputs: &[PortDoc {
-        name: "y",
-        doc: "scalar",
-    }],
+    inputs: &[PortDoc { name: "u", doc: "scalar" }],
+    outputs: &[PortDoc { name: "y", doc: "scalar" }],
     params: &[
-        ParamDoc {
-            name: "on",
-            default: Some("0.1"),
-            doc: "switch-on threshold",
-        },
-        ParamDoc {
-            name: "off",
-            default: Some("-0.1"),
-            doc: "switch-off threshold, <= on",
-        },
-        ParamDoc {
-            name: "high",
-            default: Some("1"),
-            doc: "output when on",
-        },
-        ParamDoc {
-            name: "low",
-            default: Some("-1"),
-            doc: "output when off",
-        },
+        ParamDoc { name: "on", default: Some("0.1"), doc: "switch-on threshold" },
+        ParamDoc { name: "off", default: Some("-0.1"), doc: "switch-off threshold, <= on" },
+        ParamDoc { name: "high", default: Some("1"), doc: "output when on" },
+        ParamDoc { name: "low", default: Some("-1"), doc: "output when off" },
     ],
     build: build_relay,
 };
@@ -115,16 +82,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let model = ctlgraph::core::compile(&flat, &registry)?;
     let trace = ctlgraph::simulate(model, None)?;
     let y = trace.column("y").ok_or("no y")?;
-    let late: Vec<f64> = trace
-        .t()
-        .iter()
-        .zip(y)
-        .filter(|(t, _)| **t > 10.0)
-        .map(|(_, v)| *v)
-        .collect();
-    let (lo, hi) = late
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    let late: Vec<f64> = trace.t().iter().zip(y).filter(|(t, _)| **t > 10.0).map(|(_, v)| *v).collect();
+    let (lo, hi) = late.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
     println!("limit cycle after 10 s: y in [{lo:.3}, {hi:.3}] around the set-point 1.0");
     Ok(())
 }

@@ -25,11 +25,7 @@ pub fn to_dot(model: &Model) -> String {
     for (k, (prefix, blocks)) in clusters.iter().enumerate() {
         let indent = if prefix.is_empty() { "  " } else { "    " };
         if !prefix.is_empty() {
-            let _ = writeln!(
-                s,
-                "  subgraph cluster_{k} {{\n    label=\"{}\"; style=rounded;",
-                escape(prefix)
-            );
+            let _ = writeln!(s, "  subgraph cluster_{k} {{\n    label=\"{}\"; style=rounded;", escape(prefix));
         }
         for &i in blocks {
             let m = &model.meta[i];

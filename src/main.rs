@@ -12,11 +12,7 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 #[derive(Parser)]
-#[command(
-    name = "ctlgraph",
-    version,
-    about = "Declarative control graphs: block diagrams as YAML, simulated headless"
-)]
+#[command(name = "ctlgraph", version, about = "Declarative control graphs: block diagrams as YAML, simulated headless")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -74,21 +70,9 @@ impl From<Diagnostic> for Failure {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run {
-            graph,
-            out,
-            plot,
-            sets,
-            stop_time,
-            report,
-        } => run(
-            &graph,
-            out.as_deref(),
-            plot.as_deref(),
-            &sets,
-            stop_time,
-            report.as_deref(),
-        ),
+        Command::Run { graph, out, plot, sets, stop_time, report } => {
+            run(&graph, out.as_deref(), plot.as_deref(), &sets, stop_time, report.as_deref())
+        }
         Command::Check { graph, sets } => check(&graph, &sets),
         Command::Dot { graph, sets } => compile(&graph, &sets).map(|m| print!("{}", ctlgraph::dot::to_dot(&m))),
         Command::Blocks { r#type } => blocks(r#type.as_deref()),
@@ -117,13 +101,7 @@ fn check(graph: &Path, sets: &[String]) -> Result<(), Failure> {
     println!("execution order:");
     let width = model.meta.iter().map(|m| m.name.len()).max().unwrap_or(0);
     for (i, m) in model.meta.iter().enumerate() {
-        println!(
-            "  {:>3}  {:<width$}  {:<26}  {}",
-            i + 1,
-            m.name,
-            m.type_name,
-            m.sample_time
-        );
+        println!("  {:>3}  {:<width$}  {:<26}  {}", i + 1, m.name, m.type_name, m.sample_time);
     }
     let solver = model.sim.method;
     println!(
@@ -154,9 +132,7 @@ fn blocks(ty: Option<&str>) -> Result<(), Failure> {
         return Ok(());
     };
     let Some(t) = reg.get(name) else {
-        return Err(Diagnostic::plain(format!("no block type `{name}`"))
-            .suggest(name, reg.names())
-            .into());
+        return Err(Diagnostic::plain(format!("no block type `{name}`")).suggest(name, reg.names()).into());
     };
     println!("{} ({})\n\n{}\n\n{}\n", t.name, t.category, t.summary, t.doc);
     for (title, ports) in [("inputs", t.inputs), ("outputs", t.outputs)] {
@@ -190,12 +166,7 @@ struct Progress {
 impl Progress {
     fn new(stop: f64) -> Self {
         let enabled = std::io::stderr().is_terminal() && std::env::var_os("CI").is_none();
-        Progress {
-            bar: None,
-            enabled,
-            start: Instant::now(),
-            stop,
-        }
+        Progress { bar: None, enabled, start: Instant::now(), stop }
     }
 
     fn tick(&mut self, t: f64) {
@@ -287,8 +258,7 @@ fn run(
     }
     result.map_err(|e| Failure::Run(e.to_string()))?;
     if let (Some(c), Some(path)) = (csv, out) {
-        c.commit()
-            .map_err(|e| Failure::Run(format!("cannot write {}: {e}", path.display())))?;
+        c.commit().map_err(|e| Failure::Run(format!("cannot write {}: {e}", path.display())))?;
     }
     if let (Some(tr), Some(path)) = (trace, plot) {
         let title = sim.model().name.clone().unwrap_or_else(|| graph.display().to_string());
@@ -297,11 +267,7 @@ fn run(
             .map_err(|e| Failure::Run(format!("cannot write {}: {e}", path.display())))?;
     }
     let simulated = sim.time();
-    let wall_text = if wall < 1.0 {
-        format!("{:.2} ms", wall * 1e3)
-    } else {
-        format!("{wall:.3} s")
-    };
+    let wall_text = if wall < 1.0 { format!("{:.2} ms", wall * 1e3) } else { format!("{wall:.3} s") };
     println!(
         "{}: {} steps, {simulated} s simulated in {wall_text} wall ({:.1}x real time)",
         graph.display(),

@@ -78,19 +78,12 @@ fn groups(trace: &Trace) -> Vec<(String, Vec<usize>)> {
 }
 
 fn y_range(trace: &Trace, cols: &[usize]) -> (f64, f64) {
-    let values = cols
-        .iter()
-        .flat_map(|&c| trace.columns[c].iter().copied())
-        .filter(|v| v.is_finite());
+    let values = cols.iter().flat_map(|&c| trace.columns[c].iter().copied()).filter(|v| v.is_finite());
     let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
     if !lo.is_finite() {
         return (-1.0, 1.0);
     }
-    let pad = if hi > lo {
-        0.05 * (hi - lo)
-    } else {
-        lo.abs().max(1.0) * 0.1
-    };
+    let pad = if hi > lo { 0.05 * (hi - lo) } else { lo.abs().max(1.0) * 0.1 };
     (lo - pad, hi + pad)
 }
 

@@ -82,10 +82,7 @@ impl Trace {
 
     /// A column by header name.
     pub fn column(&self, name: &str) -> Option<&[f64]> {
-        self.headers
-            .iter()
-            .position(|h| h == name)
-            .map(|i| self.columns[i].as_slice())
+        self.headers.iter().position(|h| h == name).map(|i| self.columns[i].as_slice())
     }
 
     /// Linear interpolation of column `name` at time `t`.
@@ -113,21 +110,11 @@ pub struct CsvFile {
 
 impl CsvFile {
     pub fn create(dest: &Path, headers: &[String]) -> std::io::Result<Self> {
-        create_parent(dest)?;
-        let name = dest
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let tmp = dest.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+        let tmp = temp_path(dest)?;
         let mut writer = BufWriter::with_capacity(1 << 16, File::create(&tmp)?);
         let header: Vec<String> = headers.iter().map(|h| quote(h)).collect();
         writeln!(writer, "{}", header.join(","))?;
-        Ok(CsvFile {
-            dest: dest.to_path_buf(),
-            tmp,
-            writer: Some(writer),
-            error: None,
-        })
+        Ok(CsvFile { dest: dest.to_path_buf(), tmp, writer: Some(writer), error: None })
     }
 
     /// Appends a row. Rust's `Display` and `LowerExp` for f64 print the
@@ -141,13 +128,7 @@ impl CsvFile {
         for (i, &v) in row.iter().enumerate() {
             let sep = if i == 0 { "" } else { "," };
             let plain = v == 0.0 || (1e-4..1e15).contains(&v.abs()) || !v.is_finite();
-            result = result.and_then(|_| {
-                if plain {
-                    write!(w, "{sep}{v}")
-                } else {
-                    write!(w, "{sep}{v:e}")
-                }
-            });
+            result = result.and_then(|_| if plain { write!(w, "{sep}{v}") } else { write!(w, "{sep}{v:e}") });
         }
         if let Err(e) = result.and_then(|_| w.write_all(b"\n")) {
             self.error = Some(e);
@@ -176,29 +157,22 @@ impl Drop for CsvFile {
 
 /// Quotes a header cell if CSV needs it.
 fn quote(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
+    if s.contains([',', '"', '\n']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
 }
 
-/// Creates the folder an output file goes into, if missing.
-fn create_parent(dest: &Path) -> std::io::Result<()> {
-    match dest.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => std::fs::create_dir_all(dir),
-        _ => Ok(()),
+/// A hidden temporary name beside `dest` (same folder, so the final
+/// rename is atomic), creating the folder if it is missing.
+fn temp_path(dest: &Path) -> std::io::Result<PathBuf> {
+    if let Some(dir) = dest.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
     }
+    let name = dest.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    Ok(dest.with_file_name(format!(".{name}.{}.tmp", std::process::id())))
 }
 
 /// Writes a whole file atomically (temporary name, then rename).
 pub fn write_atomic(dest: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    create_parent(dest)?;
-    let name = dest
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dest.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    let tmp = temp_path(dest)?;
     let result = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, dest));
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);

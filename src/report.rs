@@ -28,12 +28,7 @@ fn solver_json(method: Method) -> Value {
         Method::Euler { step } | Method::Heun { step } | Method::Rk4 { step } => {
             json!({ "method": method.name(), "step": step })
         }
-        Method::DormandPrince {
-            rtol,
-            atol,
-            max_step,
-            initial_step,
-        } => json!({
+        Method::DormandPrince { rtol, atol, max_step, initial_step } => json!({
             "method": method.name(), "rtol": rtol, "atol": atol, "max_step": max_step,
             "initial_step": initial_step,
         }),
@@ -65,9 +60,6 @@ pub fn to_json(info: &RunInfo) -> Value {
 mod tests {
     #[test]
     fn sha256_of_abc() {
-        assert_eq!(
-            super::sha256_hex(b"abc"),
-            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
-        );
+        assert_eq!(super::sha256_hex(b"abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
     }
 }

@@ -21,11 +21,7 @@ fn sources() {
     let trace = run(&yaml);
     assert_eq!(max_error(&trace, "c", |_| 2.5), 0.0);
     assert!(max_error(&trace, "r", |t| if t > 0.5 { 1.0 + 2.0 * (t - 0.5) } else { 1.0 }) < 1e-12);
-    assert!(
-        max_error(&trace, "s", |t| 1.0
-            + 2.0 * (6.0 * std::f64::consts::PI * t + 0.5).sin())
-            < 1e-12
-    );
+    assert!(max_error(&trace, "s", |t| 1.0 + 2.0 * (6.0 * std::f64::consts::PI * t + 0.5).sin()) < 1e-12);
     assert_eq!(max_error(&trace, "k", |t| t), 0.0);
 }
 
@@ -78,10 +74,7 @@ fn matrix_gain_and_routing() {
         "k, d.y1, d.y2, sel, sw",
     );
     let err = common::error(&yaml);
-    assert!(
-        err.message.contains("width mismatch"),
-        "u2 of the switch is 3 wide: {err}"
-    );
+    assert!(err.message.contains("width mismatch"), "u2 of the switch is 3 wide: {err}");
     let yaml = yaml.replace("sel -> sw.u2", "k -> sw.u2");
     let trace = run(&yaml);
     let last = |h: &str| *trace.column(h).unwrap().last().unwrap();
@@ -159,11 +152,7 @@ fn from_csv_interpolates_a_time_series() {
     assert_eq!(*trace.column("f").unwrap().last().unwrap(), 2.0, "held after the data");
     assert_eq!(*trace.column("z").unwrap().last().unwrap(), 0.0, "zero after the data");
 
-    std::fs::write(
-        &graph_file,
-        "blocks:\n  f: { type: from_csv, file: data.csv, column: forse }\n",
-    )
-    .unwrap();
+    std::fs::write(&graph_file, "blocks:\n  f: { type: from_csv, file: data.csv, column: forse }\n").unwrap();
     let d = ctlgraph::compile_file(&graph_file, &[]).err().unwrap();
     assert!(d.message.contains("has no column `forse` (columns: t, force)"), "{d}");
 }

@@ -5,11 +5,7 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 fn ctlgraph(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ctlgraph"))
-        .args(args)
-        .env("CI", "1")
-        .output()
-        .expect("runs")
+    Command::new(env!("CARGO_BIN_EXE_ctlgraph")).args(args).env("CI", "1").output().expect("runs")
 }
 
 fn text(bytes: &[u8]) -> String {
@@ -25,27 +21,11 @@ const LAG: &str = "graphs/tutorial/first_order.yaml";
 #[test]
 fn run_writes_csv_plot_and_report() {
     let dir = tempfile::tempdir().unwrap();
-    let (csv, svg, json) = (
-        dir.path().join("y.csv"),
-        dir.path().join("y.svg"),
-        dir.path().join("r.json"),
-    );
-    let out = ctlgraph(&[
-        "run",
-        LAG,
-        "--out",
-        path(&csv),
-        "--plot",
-        path(&svg),
-        "--report",
-        path(&json),
-    ]);
+    let (csv, svg, json) = (dir.path().join("y.csv"), dir.path().join("y.svg"), dir.path().join("r.json"));
+    let out = ctlgraph(&["run", LAG, "--out", path(&csv), "--plot", path(&svg), "--report", path(&json)]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
     let summary = text(&out.stdout);
-    assert!(
-        summary.contains("3000 steps, 3 s simulated in") && summary.contains("x real time"),
-        "{summary}"
-    );
+    assert!(summary.contains("3000 steps, 3 s simulated in") && summary.contains("x real time"), "{summary}");
     let csv = std::fs::read_to_string(csv).unwrap();
     let mut lines = csv.lines();
     assert_eq!(lines.next(), Some("t,u,y"));
@@ -69,10 +49,7 @@ fn csv_values_round_trip() {
     let text = std::fs::read_to_string(csv).unwrap();
     for (row, line) in text.lines().skip(1).enumerate() {
         for (col, cell) in line.split(',').enumerate() {
-            assert_eq!(
-                cell.parse::<f64>().unwrap().to_bits(),
-                trace.columns[col][row].to_bits()
-            );
+            assert_eq!(cell.parse::<f64>().unwrap().to_bits(), trace.columns[col][row].to_bits());
         }
     }
 }
@@ -81,10 +58,7 @@ fn csv_values_round_trip() {
 fn runs_are_deterministic() {
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a.csv"), dir.path().join("b.csv"));
-    for (file, graph) in [
-        (&a, "graphs/tutorial/multirate.yaml"),
-        (&b, "graphs/tutorial/multirate.yaml"),
-    ] {
+    for (file, graph) in [(&a, "graphs/tutorial/multirate.yaml"), (&b, "graphs/tutorial/multirate.yaml")] {
         assert!(ctlgraph(&["run", graph, "--out", path(file)]).status.success());
     }
     assert_eq!(std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
@@ -96,22 +70,14 @@ fn set_overrides_a_parameter_and_rejects_unknown_ones() {
     let csv = dir.path().join("y.csv");
     let out = ctlgraph(&["run", LAG, "--set", "tau=1.0", "--stop-time", "1", "--out", path(&csv)]);
     assert!(out.status.success(), "{}", text(&out.stderr));
-    let last = std::fs::read_to_string(&csv)
-        .unwrap()
-        .lines()
-        .last()
-        .unwrap()
-        .to_string();
+    let last = std::fs::read_to_string(&csv).unwrap().lines().last().unwrap().to_string();
     let y: f64 = last.split(',').nth(2).unwrap().parse().unwrap();
     assert!((y - (1.0 - (-1.0f64).exp())).abs() < 1e-9, "y(1) with tau = 1: {y}");
 
     let out = ctlgraph(&["run", LAG, "--set", "tua=1.0"]);
     assert_eq!(out.status.code(), Some(2));
     let err = text(&out.stderr);
-    assert!(
-        err.contains("--set tua") && err.contains("did you mean `tau`?"),
-        "{err}"
-    );
+    assert!(err.contains("--set tua") && err.contains("did you mean `tau`?"), "{err}");
     let out = ctlgraph(&["run", LAG, "--set", "tau"]);
     assert_eq!(out.status.code(), Some(2));
 }
@@ -125,13 +91,7 @@ fn invalid_graph_exits_2_and_writes_nothing() {
     let out = ctlgraph(&["run", path(&graph), "--out", path(&csv)]);
     assert_eq!(out.status.code(), Some(2));
     let err = text(&out.stderr);
-    assert!(
-        err.starts_with(&format!(
-            "error: {}:2:14: block `u`: unknown block type `stp`",
-            graph.display()
-        )),
-        "{err}"
-    );
+    assert!(err.starts_with(&format!("error: {}:2:14: block `u`: unknown block type `stp`", graph.display())), "{err}");
     assert!(err.contains("did you mean `step`?"));
     assert!(!csv.exists());
     assert_eq!(ctlgraph(&["run", "no/such/file.yaml"]).status.code(), Some(2));
@@ -153,10 +113,7 @@ fn blow_up_exits_1_names_block_and_time_and_leaves_no_partial_csv() {
     assert_eq!(out.status.code(), Some(1));
     assert_eq!(text(&out.stderr).trim(), "error: t = 0.5: block `d`: output `y` is inf");
     assert!(!csv.exists(), "no half-written CSV");
-    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(leftovers.len(), 1, "only the graph remains: {leftovers:?}");
 }
 
@@ -165,10 +122,7 @@ fn check_prints_the_execution_order() {
     let out = ctlgraph(&["check", "graphs/tutorial/multirate.yaml"]);
     assert!(out.status.success());
     let s = text(&out.stdout);
-    let pos = |name: &str| {
-        s.find(&format!("  {name} "))
-            .unwrap_or_else(|| panic!("{name} missing in\n{s}"))
-    };
+    let pos = |name: &str| s.find(&format!("  {name} ")).unwrap_or_else(|| panic!("{name} missing in\n{s}"));
     assert!(pos("plant") < pos("err") && pos("err") < pos("ctrl"), "{s}");
     assert!(s.contains("discrete 0.001") && s.contains("discrete 0.02"), "{s}");
 }

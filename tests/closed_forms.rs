@@ -81,11 +81,7 @@ fn zpk_and_state_space_match_the_transfer_function() {
                 \x20 ss: { type: state_space, A: [[0, 1], [-25, -3]], B: [[0], [1]], C: [[10, 2]] }\n\
                 wires: [u -> tf, u -> zp, u -> ss]\nrecord: [tf, zp, ss]\n";
     let trace = run(yaml);
-    let (tf, zp, ss) = (
-        trace.column("tf").unwrap(),
-        trace.column("zp").unwrap(),
-        trace.column("ss").unwrap(),
-    );
+    let (tf, zp, ss) = (trace.column("tf").unwrap(), trace.column("zp").unwrap(), trace.column("ss").unwrap());
     for i in 0..tf.len() {
         assert!((tf[i] - zp[i]).abs() < 1e-9 && (tf[i] - ss[i]).abs() < 1e-9, "row {i}");
     }
@@ -97,10 +93,7 @@ fn pid_loop_settles_without_steady_state_error() {
     let yaml = std::fs::read_to_string("graphs/tutorial/pid_loop.yaml").unwrap();
     let trace = run(&yaml);
     let y = trace.column("y").unwrap();
-    assert!(
-        (y.last().unwrap() - 1.0).abs() < 1e-3,
-        "integral action removes the error"
-    );
+    assert!((y.last().unwrap() - 1.0).abs() < 1e-3, "integral action removes the error");
     let u = trace.column("u").unwrap();
     assert!(u.iter().all(|v| v.abs() <= 5.0), "output limits hold");
     assert!(u.contains(&5.0), "the limit is reached at the step");
@@ -113,11 +106,7 @@ fn step_switches_exactly_at_its_time() {
     let yaml = "simulation: { stop: 1.0 }\nblocks:\n  s: { type: step, at: 0.3 }\n  i: { type: integrator }\n\
                 wires: [s -> i]\nrecord: [s, i]\n";
     let trace = run(yaml);
-    let k = trace
-        .t()
-        .iter()
-        .position(|&t| t == 0.3)
-        .expect("a major step at exactly 0.3");
+    let k = trace.t().iter().position(|&t| t == 0.3).expect("a major step at exactly 0.3");
     assert_eq!(trace.column("s").unwrap()[k], 1.0);
     assert_eq!(trace.column("s").unwrap()[k - 1], 0.0);
     let err = max_error(&trace, "i", |t| (t - 0.3).max(0.0));

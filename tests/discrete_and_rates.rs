@@ -25,11 +25,8 @@ fn unit_delay_and_discrete_tf_give_their_exact_sequences() {
                 \x20 dtf: { type: discrete_transfer_function, num: [1], den: [1, -0.5], sample_time: 0.1 }\n\
                 wires: [c -> zoh, zoh -> delay, one -> dtf]\nrecord: [zoh, delay, dtf]\n";
     let trace = run(yaml);
-    let (zoh, delay, dtf) = (
-        trace.column("zoh").unwrap(),
-        trace.column("delay").unwrap(),
-        trace.column("dtf").unwrap(),
-    );
+    let (zoh, delay, dtf) =
+        (trace.column("zoh").unwrap(), trace.column("delay").unwrap(), trace.column("dtf").unwrap());
     let h = hits(trace.t(), 0.1, 0.0);
     assert_eq!(h.len(), 11);
     for &(k, i) in &h {
@@ -53,11 +50,7 @@ fn discrete_outputs_hold_between_hits_at_several_rates() {
         let last_fast = ((t + 1e-9) / 0.1).floor() * 0.1;
         assert!((fast[i] - last_fast).abs() < 1e-12, "fast at t = {t}: {}", fast[i]);
         // Before the first slow hit (t = 0.05) the output is 0.
-        let last_slow = if t < 0.05 - 1e-9 {
-            0.0
-        } else {
-            ((t - 0.05 + 1e-9) / 0.25).floor() * 0.25 + 0.05
-        };
+        let last_slow = if t < 0.05 - 1e-9 { 0.0 } else { ((t - 0.05 + 1e-9) / 0.25).floor() * 0.25 + 0.05 };
         assert!((slow[i] - last_slow).abs() < 1e-12, "slow at t = {t}: {}", slow[i]);
     }
 }
@@ -190,11 +183,7 @@ fn rate_limiter_slews_a_step() {
     let trace = run(yaml);
     // Like Simulink, the limiter slews from its output at the previous major
     // step (t = 0.19), so the ramp starts one step before the input's jump.
-    let err = max_error(
-        &trace,
-        "rl",
-        |t| if t < 0.2 { 0.0 } else { (2.0 * (t - 0.19)).min(1.0) },
-    );
+    let err = max_error(&trace, "rl", |t| if t < 0.2 { 0.0 } else { (2.0 * (t - 0.19)).min(1.0) });
     assert!(err < 1e-12, "max error {err}");
 }
 

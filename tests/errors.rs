@@ -22,26 +22,14 @@ const PLANT: &str = "  plant: { type: transfer_function, num: [1], den: [1, 1] }
 #[test]
 fn unknown_block_type_suggests_the_closest() {
     let yaml = "blocks:\n  p: { type: transfer_fuction, num: [1], den: [1, 1] }\n";
-    check(
-        yaml,
-        2,
-        14,
-        "block `p`: unknown block type `transfer_fuction`",
-        Some("did you mean `transfer_function`?"),
-    );
+    check(yaml, 2, 14, "block `p`: unknown block type `transfer_fuction`", Some("did you mean `transfer_function`?"));
 }
 
 #[test]
 fn unknown_parameter_names_block_and_key() {
     let yaml =
         format!("blocks:\n  u: {{ type: step }}\n  g: {{ type: gain, gian: 2 }}\n{PLANT}wires: [u -> g, g -> plant]\n");
-    check(
-        &yaml,
-        3,
-        20,
-        "block `g` (gain): unknown parameter `gian`",
-        Some("gain takes: k, sample_time"),
-    );
+    check(&yaml, 3, 20, "block `g` (gain): unknown parameter `gian`", Some("gain takes: k, sample_time"));
 }
 
 #[test]
@@ -59,13 +47,7 @@ fn missing_parameter() {
 #[test]
 fn wrong_parameter_type_and_shape() {
     let yaml = "blocks:\n  u: { type: step, at: [1, 2] }\n";
-    check(
-        yaml,
-        2,
-        24,
-        "block `u` (step): `at`: expected a number, found a list",
-        None,
-    );
+    check(yaml, 2, 24, "block `u` (step): `at`: expected a number, found a list", None);
     let yaml = "blocks:\n  u: { type: step }\n  plant: { type: transfer_function, num: { a: 1 }, den: [1, 1] }\nwires: [u -> plant]\n";
     check(yaml, 3, 42, "`num`: expected a list of numbers, found a mapping", None);
     let yaml = "blocks:\n  s: { type: state_space, A: [[0, 1]], B: [[0], [1]], C: [[1, 0]] }\n";
@@ -75,21 +57,9 @@ fn wrong_parameter_type_and_shape() {
 #[test]
 fn expression_errors_point_inside_the_string() {
     let yaml = "parameters:\n  w0: 1000\n  b: \"3*w00\"\n";
-    check(
-        yaml,
-        3,
-        9,
-        "parameter `b`: unknown name `w00`",
-        Some("did you mean `w0`?"),
-    );
+    check(yaml, 3, 9, "parameter `b`: unknown name `w00`", Some("did you mean `w0`?"));
     let yaml = "parameters:\n  k: 2\nblocks:\n  g: { type: constant, value: [1, \"k +\"] }\n";
-    check(
-        yaml,
-        4,
-        39,
-        "block `g` (constant): `value`: expression ends too early",
-        None,
-    );
+    check(yaml, 4, 39, "block `g` (constant): `value`: expression ends too early", None);
 }
 
 #[test]
@@ -105,13 +75,7 @@ fn wire_to_a_missing_block_or_port() {
     let yaml = format!("blocks:\n  u: {{ type: step }}\n{PLANT}wires:\n  - u.out -> plant\n");
     check(&yaml, 5, 5, "block `u` (step) has no output `out`", Some("outputs: y"));
     let yaml = "blocks:\n  u: { type: step }\n  e: { type: sum, signs: \"+-\" }\nwires:\n  - u -> e\n";
-    check(
-        yaml,
-        5,
-        10,
-        "has 2 inputs: name one as `e.PORT`",
-        Some("inputs: u1, u2"),
-    );
+    check(yaml, 5, 10, "has 2 inputs: name one as `e.PORT`", Some("inputs: u1, u2"));
 }
 
 #[test]
@@ -121,38 +85,20 @@ fn unwired_and_doubly_wired_inputs() {
     let yaml = format!(
         "blocks:\n  u: {{ type: step }}\n  v: {{ type: step }}\n{PLANT}wires:\n  - u -> plant\n  - v -> plant\n"
     );
-    check(
-        &yaml,
-        7,
-        10,
-        "input `plant.u` is wired twice",
-        Some("already fed at line 6"),
-    );
+    check(&yaml, 7, 10, "input `plant.u` is wired twice", Some("already fed at line 6"));
 }
 
 #[test]
 fn width_mismatch() {
     let yaml =
         "blocks:\n  c: { type: constant, value: [1, 2, 3] }\n  m: { type: demux, outputs: 2 }\nwires:\n  - c -> m\n";
-    check(
-        yaml,
-        5,
-        10,
-        "width mismatch: `c.y` carries 3 value(s) but `m.u` takes 2",
-        Some("mux/demux/selector"),
-    );
+    check(yaml, 5, 10, "width mismatch: `c.y` carries 3 value(s) but `m.u` takes 2", Some("mux/demux/selector"));
 }
 
 #[test]
 fn improper_transfer_function() {
     let yaml = "blocks:\n  u: { type: step }\n  d: { type: transfer_function, num: [1, 0, 0], den: [1, 1] }\nwires: [u -> d]\n";
-    check(
-        yaml,
-        3,
-        38,
-        "improper transfer function: numerator degree 2 exceeds denominator degree 1",
-        None,
-    );
+    check(yaml, 3, 38, "improper transfer function: numerator degree 2 exceeds denominator degree 1", None);
 }
 
 #[test]
@@ -193,28 +139,10 @@ fn structural_mistakes() {
         "unknown top-level key `wire`",
         Some("did you mean `wires`?"),
     );
-    check(
-        "simulation: { solver: { method: rk5, step: 0.1 } }\n",
-        1,
-        33,
-        "unknown solver method `rk5`",
-        Some("rk4"),
-    );
-    check(
-        "simulation: { solver: rk4 }\n",
-        1,
-        23,
-        "the fixed-step method `rk4` needs a `step`",
-        None,
-    );
+    check("simulation: { solver: { method: rk5, step: 0.1 } }\n", 1, 33, "unknown solver method `rk5`", Some("rk4"));
+    check("simulation: { solver: rk4 }\n", 1, 23, "the fixed-step method `rk4` needs a `step`", None);
     check("simulation: { stop: -1 }\n", 1, 21, "must be a positive number", None);
-    check(
-        "blocks:\n  u: { type: step }\nrecord: [u, u]\n",
-        3,
-        13,
-        "`u` is recorded twice",
-        None,
-    );
+    check("blocks:\n  u: { type: step }\nrecord: [u, u]\n", 3, 13, "`u` is recorded twice", None);
     check(
         "blocks:\n  u: { type: step }\nrecord: [v]\n",
         3,
@@ -228,9 +156,7 @@ fn structural_mistakes() {
 fn set_of_an_unknown_parameter() {
     let yaml = "parameters: { tau: 1 }\nblocks:\n  u: { type: step }\n";
     let sets = [("tua".to_string(), "2".to_string())];
-    let Err(d) = ctlgraph::compile_str(yaml, "test.yaml", &sets) else {
-        panic!("accepted --set tua")
-    };
+    let Err(d) = ctlgraph::compile_str(yaml, "test.yaml", &sets) else { panic!("accepted --set tua") };
     assert_eq!(d.message, "--set tua: test.yaml has no parameter `tua`");
     assert_eq!(d.hint.as_deref(), Some("did you mean `tau`?"));
 }
@@ -249,16 +175,11 @@ fn subsystem_errors_name_the_file_they_are_in() {
         "blocks:\n  u: { type: step }\n  s: { type: subsystem, file: inner.yaml }\nwires: [u -> s]\n",
     )
     .unwrap();
-    let d = ctlgraph::compile_file(&outer, &[])
-        .err()
-        .expect("error inside the subsystem");
+    let d = ctlgraph::compile_file(&outer, &[]).err().expect("error inside the subsystem");
     let pos = d.pos.clone().unwrap();
     assert!(pos.file.ends_with("inner.yaml"), "{d}");
     assert_eq!((pos.line, pos.col), (4, 26));
-    assert!(
-        d.message.contains("block `s/g` (gain): unknown parameter `bogus`"),
-        "{d}"
-    );
+    assert!(d.message.contains("block `s/g` (gain): unknown parameter `bogus`"), "{d}");
 
     std::fs::write(&outer, "blocks:\n  u: { type: step }\n  s: { type: subsystem, file: inner.yaml, parameters: { kk: 2 } }\nwires: [u -> s]\n")
         .unwrap();
@@ -272,11 +193,7 @@ fn subsystem_errors_name_the_file_they_are_in() {
     )
     .unwrap();
     let d = ctlgraph::compile_file(&outer, &[]).err().unwrap();
-    assert!(
-        d.to_string()
-            .contains("outer.yaml:3:31: block `s` (subsystem): cannot read"),
-        "{d}"
-    );
+    assert!(d.to_string().contains("outer.yaml:3:31: block `s` (subsystem): cannot read"), "{d}");
 }
 
 #[test]

@@ -82,15 +82,7 @@ fn allocations_while_stepping(solver: &str, steps: usize) -> usize {
 
 #[test]
 fn stepping_allocates_nothing() {
-    assert_eq!(
-        allocations_while_stepping("{ method: rk4, step: 1.0e-4 }", 20_000),
-        0,
-        "rk4"
-    );
+    assert_eq!(allocations_while_stepping("{ method: rk4, step: 1.0e-4 }", 20_000), 0, "rk4");
     COUNT.with(|c| c.set(0));
-    assert_eq!(
-        allocations_while_stepping("{ method: dopri5, max_step: 1.0e-3 }", 5_000),
-        0,
-        "dopri5"
-    );
+    assert_eq!(allocations_while_stepping("{ method: dopri5, max_step: 1.0e-3 }", 5_000), 0, "dopri5");
 }

@@ -66,35 +66,23 @@ struct Stable {
 fn stable_system() -> impl Strategy<Value = Stable> {
     let real_poles = prop::collection::vec(-20.0..-0.5f64, 0..=2);
     let pair = prop::option::of((-10.0..-0.5f64, 0.5..15.0f64));
-    (
-        real_poles,
-        pair,
-        prop::collection::vec(-20.0..20.0f64, 0..=3),
-        -5.0..5.0f64,
+    (real_poles, pair, prop::collection::vec(-20.0..20.0f64, 0..=3), -5.0..5.0f64).prop_filter_map(
+        "need distinct poles and no more zeros than poles",
+        |(reals, pair, zeros, gain)| {
+            let mut poles: Vec<Complex<f64>> = reals.iter().map(|&r| Complex::new(r, 0.0)).collect();
+            if let Some((re, im)) = pair {
+                poles.push(Complex::new(re, im));
+                poles.push(Complex::new(re, -im));
+            }
+            let distinct = poles.iter().enumerate().all(|(i, a)| poles[..i].iter().all(|b| (a - b).norm() > 0.3));
+            let zeros: Vec<f64> = zeros.into_iter().filter(|z| poles.iter().all(|p| (p - z).norm() > 0.3)).collect();
+            (!poles.is_empty() && distinct && zeros.len() <= poles.len()).then(|| Stable {
+                zeros: zeros[..zeros.len().min(poles.len())].to_vec(),
+                poles,
+                gain,
+            })
+        },
     )
-        .prop_filter_map(
-            "need distinct poles and no more zeros than poles",
-            |(reals, pair, zeros, gain)| {
-                let mut poles: Vec<Complex<f64>> = reals.iter().map(|&r| Complex::new(r, 0.0)).collect();
-                if let Some((re, im)) = pair {
-                    poles.push(Complex::new(re, im));
-                    poles.push(Complex::new(re, -im));
-                }
-                let distinct = poles
-                    .iter()
-                    .enumerate()
-                    .all(|(i, a)| poles[..i].iter().all(|b| (a - b).norm() > 0.3));
-                let zeros: Vec<f64> = zeros
-                    .into_iter()
-                    .filter(|z| poles.iter().all(|p| (p - z).norm() > 0.3))
-                    .collect();
-                (!poles.is_empty() && distinct && zeros.len() <= poles.len()).then(|| Stable {
-                    zeros: zeros[..zeros.len().min(poles.len())].to_vec(),
-                    poles,
-                    gain,
-                })
-            },
-        )
 }
 
 impl Stable {
@@ -117,13 +105,7 @@ impl Stable {
     fn residue(&self, i: usize) -> Complex<f64> {
         let p = self.poles[i];
         let num: Complex<f64> = self.zeros.iter().map(|&z| p - z).product();
-        let den: Complex<f64> = self
-            .poles
-            .iter()
-            .enumerate()
-            .filter(|(j, _)| *j != i)
-            .map(|(_, &q)| p - q)
-            .product();
+        let den: Complex<f64> = self.poles.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, &q)| p - q).product();
         num * self.gain / den
     }
 

@@ -7,10 +7,7 @@ mod common;
 fn subsystem_runs_bit_for_bit_like_its_flat_equivalent() {
     let nested = ctlgraph::compile_file("graphs/tutorial/subsystem.yaml".as_ref(), &[]).unwrap();
     let names: Vec<&str> = nested.meta.iter().map(|m| m.name.as_str()).collect();
-    assert!(
-        names.contains(&"soft/i_part") && names.contains(&"stiff/p_gain"),
-        "{names:?}"
-    );
+    assert!(names.contains(&"soft/i_part") && names.contains(&"stiff/p_gain"), "{names:?}");
     let nested = ctlgraph::simulate(nested, None).unwrap();
 
     // The `soft` instance written out flat: kp = 1, ki = 2, b = 0.5.

@@ -2,21 +2,12 @@
 //! given as transfer function, zeros-poles-gain or state space. States are
 //! integrated by the simulation's solver.
 
-use crate::param;
+use crate::{U_ANY, U_SCALAR, Y_SAME, Y_SCALAR, param};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 use ctlgraph_solver::lti::LtiError;
 use ctlgraph_solver::{StateSpace, tf2ss, zpk2tf};
 use nalgebra::Complex;
-
-const SISO_IN: &[PortDoc] = &[PortDoc {
-    name: "u",
-    doc: "scalar",
-}];
-const SISO_OUT: &[PortDoc] = &[PortDoc {
-    name: "y",
-    doc: "scalar",
-}];
 
 pub const TYPES: &[BlockType] = &[
     BlockType {
@@ -26,14 +17,8 @@ pub const TYPES: &[BlockType] = &[
         doc: "x' = u, y = x, elementwise. With limits, x stays in [lower, upper]: the derivative is \
               zeroed while x sits on a limit and u pushes outward, and x is projected back after each \
               step (Simulink's limited integrator). No direct feedthrough: it closes loops legally.",
-        inputs: &[PortDoc {
-            name: "u",
-            doc: "any width",
-        }],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "same width as u",
-        }],
+        inputs: U_ANY,
+        outputs: Y_SAME,
         params: &[
             param("initial", Some("0"), "x(0): a number or one per element"),
             param("lower", Some("-inf"), "lower limit of x"),
@@ -48,14 +33,8 @@ pub const TYPES: &[BlockType] = &[
         doc: "A realisable derivative: y = (u − x)/τ with x' = (u − x)/τ, i.e. Y(s) = s/(τs + 1)·U(s). \
               It differentiates frequencies below 1/τ rad/s. x(0) = `initial_input`, so a signal that \
               starts at that value gives no kick at t = 0.",
-        inputs: &[PortDoc {
-            name: "u",
-            doc: "any width",
-        }],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "same width as u",
-        }],
+        inputs: U_ANY,
+        outputs: Y_SAME,
         params: &[
             param("tau", Some("1e-3"), "filter time constant τ [s], > 0"),
             param("initial_input", Some("0"), "the input assumed before t = 0"),
@@ -70,8 +49,8 @@ pub const TYPES: &[BlockType] = &[
               2.242e4] is 1.639e4/(s² + 154.8 s + 2.242e4). Must be proper (deg num <= deg den). \
               Realised in controllable canonical form (MATLAB's tf2ss), zero initial state. Direct \
               feedthrough only when deg num = deg den.",
-        inputs: SISO_IN,
-        outputs: SISO_OUT,
+        inputs: U_SCALAR,
+        outputs: Y_SCALAR,
         params: &[
             param("num", None, "numerator coefficients, descending powers of s"),
             param("den", None, "denominator coefficients, descending powers of s"),
@@ -84,8 +63,8 @@ pub const TYPES: &[BlockType] = &[
         summary: "Continuous transfer function from zeros, poles and gain.",
         doc: "G(s) = gain·Π(s − zᵢ)/Π(s − pᵢ). A complex root is written [re, im] and stands for the \
               conjugate pair re ± j·im. Realised like transfer_function.",
-        inputs: SISO_IN,
-        outputs: SISO_OUT,
+        inputs: U_SCALAR,
+        outputs: Y_SCALAR,
         params: &[
             param("zeros", Some("[]"), "list of zeros: numbers or [re, im] pairs"),
             param("poles", None, "list of poles: numbers or [re, im] pairs"),
@@ -99,14 +78,8 @@ pub const TYPES: &[BlockType] = &[
         summary: "x' = A x + B u, y = C x + D u.",
         doc: "Matrices as lists of rows. Input width = columns of B, output width = rows of C. D \
               defaults to zero (no direct feedthrough).",
-        inputs: &[PortDoc {
-            name: "u",
-            doc: "width = columns of B",
-        }],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "width = rows of C",
-        }],
+        inputs: &[PortDoc { name: "u", doc: "width = columns of B" }],
+        outputs: &[PortDoc { name: "y", doc: "width = rows of C" }],
         params: &[
             param("A", None, "n×n"),
             param("B", None, "n×m"),
@@ -174,18 +147,8 @@ fn build_integrator(p: &mut Params) -> Result<Built, Diagnostic> {
     if let Some(v) = initial.iter().find(|v| !(lower..=upper).contains(*v)) {
         return Err(p.error("initial", format!("{v} is outside [{lower}, {upper}]")));
     }
-    let iface = Interface::new(SampleTime::Continuous)
-        .input("u", Width::Common, false)
-        .output("y", Width::Common);
-    Ok(Built::new(
-        Integrator {
-            initial,
-            x0: Vec::new(),
-            lower,
-            upper,
-        },
-        iface,
-    ))
+    let iface = Interface::new(SampleTime::Continuous).input("u", Width::Common, false).output("y", Width::Common);
+    Ok(Built::new(Integrator { initial, x0: Vec::new(), lower, upper }, iface))
 }
 
 /// s/(τs + 1), elementwise.
@@ -220,24 +183,10 @@ impl Block for Derivative {
 }
 
 fn build_derivative(p: &mut Params) -> Result<Built, Diagnostic> {
-    let tau = p.number_where(
-        "tau",
-        Some(1e-3),
-        |v| v > 0.0 && v.is_finite(),
-        "a positive time constant",
-    )?;
+    let tau = p.number_where("tau", Some(1e-3), |v| v > 0.0 && v.is_finite(), "a positive time constant")?;
     let initial_input = p.number_or("initial_input", 0.0)?;
-    let iface = Interface::new(SampleTime::Continuous)
-        .input("u", Width::Common, true)
-        .output("y", Width::Common);
-    Ok(Built::new(
-        Derivative {
-            tau,
-            initial_input,
-            width: 1,
-        },
-        iface,
-    ))
+    let iface = Interface::new(SampleTime::Continuous).input("u", Width::Common, true).output("y", Width::Common);
+    Ok(Built::new(Derivative { tau, initial_input, width: 1 }, iface))
 }
 
 /// A continuous LTI system; `y` is scratch so output needs no aliasing.
@@ -251,12 +200,7 @@ pub struct Lti {
 impl Lti {
     pub fn new(ss: StateSpace, x0: Vec<f64>) -> Self {
         let feedthrough = ss.has_feedthrough();
-        Lti {
-            y: vec![0.0; ss.p],
-            x0,
-            ss,
-            feedthrough,
-        }
+        Lti { y: vec![0.0; ss.p], x0, ss, feedthrough }
     }
 
     /// The block with its interface: input/output widths from the matrices.

@@ -2,8 +2,8 @@
 //! zero-order hold. They run at their sample hits and hold in between.
 
 use crate::continuous::{initial_vector, lti_error};
-use crate::{SAMPLE_TIME_REQUIRED, param};
-use ctlgraph_core::registry::{BlockType, Built, PortDoc};
+use crate::{SAMPLE_TIME_REQUIRED, U_ANY, U_SCALAR, Y_SAME, Y_SCALAR, param};
+use ctlgraph_core::registry::{BlockType, Built};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 use ctlgraph_solver::{StateSpace, tf2ss};
 
@@ -16,14 +16,8 @@ pub const TYPES: &[BlockType] = &[
               [1, -0.5] is 1/(z − 0.5), i.e. y(k) = 0.5·y(k−1) + u(k−1). Realised as x(k+1) = A x(k) + \
               B u(k), y(k) = C x(k) + D u(k) in controllable canonical form; zero initial state. Must \
               be proper; direct feedthrough only when deg num = deg den.",
-        inputs: &[PortDoc {
-            name: "u",
-            doc: "scalar",
-        }],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "scalar",
-        }],
+        inputs: U_SCALAR,
+        outputs: Y_SCALAR,
         params: &[
             param("num", None, "numerator, descending powers of z"),
             param("den", None, "denominator, descending powers of z"),
@@ -36,18 +30,9 @@ pub const TYPES: &[BlockType] = &[
         category: "discrete",
         summary: "y(k) = u(k−1): one sample of delay.",
         doc: "y(k) = x(k), x(k+1) = u(k), x(0) = initial. No direct feedthrough: it closes loops legally.",
-        inputs: &[PortDoc {
-            name: "u",
-            doc: "any width",
-        }],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "same width as u",
-        }],
-        params: &[
-            param("initial", Some("0"), "y(0): a number or one per element"),
-            SAMPLE_TIME_REQUIRED,
-        ],
+        inputs: U_ANY,
+        outputs: Y_SAME,
+        params: &[param("initial", Some("0"), "y(0): a number or one per element"), SAMPLE_TIME_REQUIRED],
         build: build_unit_delay,
     },
     BlockType {
@@ -55,14 +40,8 @@ pub const TYPES: &[BlockType] = &[
         category: "discrete",
         summary: "Samples its input every T seconds and holds it.",
         doc: "y(t) = u(t_k) for t_k <= t < t_k + T.",
-        inputs: &[PortDoc {
-            name: "u",
-            doc: "any width",
-        }],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "same width as u",
-        }],
+        inputs: U_ANY,
+        outputs: Y_SAME,
         params: &[SAMPLE_TIME_REQUIRED],
         build: build_zoh,
     },
@@ -78,12 +57,7 @@ pub struct DiscreteLti {
 
 impl DiscreteLti {
     pub fn new(ss: StateSpace) -> Self {
-        DiscreteLti {
-            x: vec![0.0; ss.n],
-            next: vec![0.0; ss.n],
-            y: vec![0.0; ss.p],
-            ss,
-        }
+        DiscreteLti { x: vec![0.0; ss.n], next: vec![0.0; ss.n], y: vec![0.0; ss.p], ss }
     }
 }
 
@@ -105,9 +79,7 @@ fn build_dtf(p: &mut Params) -> Result<Built, Diagnostic> {
     let (num, den) = (p.vector("num")?, p.vector("den")?);
     let ss = tf2ss(&num, &den).map_err(|e| lti_error(p, e))?;
     let st = p.discrete_sample_time()?;
-    let iface = Interface::new(st)
-        .input("u", Width::Fixed(1), ss.has_feedthrough())
-        .output("y", Width::Fixed(1));
+    let iface = Interface::new(st).input("u", Width::Fixed(1), ss.has_feedthrough()).output("y", Width::Fixed(1));
     Ok(Built::new(DiscreteLti::new(ss), iface))
 }
 
@@ -138,9 +110,7 @@ impl Block for UnitDelay {
 fn build_unit_delay(p: &mut Params) -> Result<Built, Diagnostic> {
     let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
     let st = p.discrete_sample_time()?;
-    let iface = Interface::new(st)
-        .input("u", Width::Common, false)
-        .output("y", Width::Common);
+    let iface = Interface::new(st).input("u", Width::Common, false).output("y", Width::Common);
     Ok(Built::new(UnitDelay { initial, x: Vec::new() }, iface))
 }
 
@@ -157,10 +127,5 @@ impl Block for Hold {
 
 fn build_zoh(p: &mut Params) -> Result<Built, Diagnostic> {
     let st = p.discrete_sample_time()?;
-    Ok(Built::new(
-        Hold,
-        Interface::new(st)
-            .input("u", Width::Common, true)
-            .output("y", Width::Common),
-    ))
+    Ok(Built::new(Hold, Interface::new(st).input("u", Width::Common, true).output("y", Width::Common)))
 }

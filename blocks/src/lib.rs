@@ -3,7 +3,7 @@
 //! Every block type documents its ports, parameters (with defaults) and
 //! equations in its [`BlockType`] entry; `ctlgraph blocks TYPE` prints them.
 
-use ctlgraph_core::registry::{ParamDoc, Registry};
+use ctlgraph_core::registry::{ParamDoc, PortDoc, Registry};
 
 pub mod continuous;
 pub mod discrete;
@@ -39,26 +39,24 @@ pub(crate) const fn param(name: &'static str, default: Option<&'static str>, doc
     ParamDoc { name, default, doc }
 }
 
+/// An input of any width, and an output of the same width.
+pub(crate) const U_ANY: &[PortDoc] = &[PortDoc { name: "u", doc: "any width" }];
+pub(crate) const Y_SAME: &[PortDoc] = &[PortDoc { name: "y", doc: "same width as u" }];
+/// Scalar input and output.
+pub(crate) const U_SCALAR: &[PortDoc] = &[PortDoc { name: "u", doc: "scalar" }];
+pub(crate) const Y_SCALAR: &[PortDoc] = &[PortDoc { name: "y", doc: "scalar" }];
+
 /// The `sample_time` parameter of blocks that inherit their rate by default.
-pub(crate) const SAMPLE_TIME_INHERITED: ParamDoc = param(
-    "sample_time",
-    Some("-1"),
-    "-1 inherit from inputs, 0 continuous, T > 0 every T seconds, [T, offset]",
-);
+pub(crate) const SAMPLE_TIME_INHERITED: ParamDoc =
+    param("sample_time", Some("-1"), "-1 inherit from inputs, 0 continuous, T > 0 every T seconds, [T, offset]");
 
 /// The `sample_time` parameter of sources, continuous by default.
-pub(crate) const SAMPLE_TIME_CONTINUOUS: ParamDoc = param(
-    "sample_time",
-    Some("0"),
-    "0 continuous, T > 0 sampled every T seconds and held, [T, offset]",
-);
+pub(crate) const SAMPLE_TIME_CONTINUOUS: ParamDoc =
+    param("sample_time", Some("0"), "0 continuous, T > 0 sampled every T seconds and held, [T, offset]");
 
 /// The `sample_time` parameter of blocks that only exist in discrete form.
-pub(crate) const SAMPLE_TIME_REQUIRED: ParamDoc = param(
-    "sample_time",
-    None,
-    "period T > 0 in seconds, or [T, offset] with 0 <= offset < T",
-);
+pub(crate) const SAMPLE_TIME_REQUIRED: ParamDoc =
+    param("sample_time", None, "period T > 0 in seconds, or [T, offset] with 0 <= offset < T");
 
 #[cfg(test)]
 mod tests {

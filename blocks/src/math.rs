@@ -2,29 +2,15 @@
 //! `fcn` (an expression of the inputs and time). All elementwise on any
 //! width, scalar inputs broadcast.
 
-use crate::{SAMPLE_TIME_INHERITED, param};
+use crate::{SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, Y_SCALAR, param};
 use ctlgraph_core::expr::Expr;
 use ctlgraph_core::params::{VarScope, expr_diagnostic};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::yaml::Kind;
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 
-const U_ANY: &[PortDoc] = &[PortDoc {
-    name: "u",
-    doc: "any width",
-}];
-const Y_SAME: &[PortDoc] = &[PortDoc {
-    name: "y",
-    doc: "same width as the input",
-}];
-const UN: &[PortDoc] = &[PortDoc {
-    name: "u1 … un",
-    doc: "any widths; scalars broadcast",
-}];
-const Y_ELEMENTWISE: &[PortDoc] = &[PortDoc {
-    name: "y",
-    doc: "width of the widest input",
-}];
+const UN: &[PortDoc] = &[PortDoc { name: "u1 … un", doc: "any widths; scalars broadcast" }];
+const Y_ELEMENTWISE: &[PortDoc] = &[PortDoc { name: "y", doc: "width of the widest input" }];
 
 pub const TYPES: &[BlockType] = &[
     BlockType {
@@ -35,10 +21,7 @@ pub const TYPES: &[BlockType] = &[
               width); a list of rows is a matrix K and y = K u (width rows(K)).",
         inputs: U_ANY,
         outputs: Y_SAME,
-        params: &[
-            param("k", Some("1"), "number, list (elementwise) or list of rows (matrix)"),
-            SAMPLE_TIME_INHERITED,
-        ],
+        params: &[param("k", Some("1"), "number, list (elementwise) or list of rows (matrix)"), SAMPLE_TIME_INHERITED],
         build: build_gain,
     },
     BlockType {
@@ -49,10 +32,7 @@ pub const TYPES: &[BlockType] = &[
               sign the block sums the elements of its one (vector) input into a scalar.",
         inputs: UN,
         outputs: Y_ELEMENTWISE,
-        params: &[
-            param("signs", Some("++"), "one + or - per input"),
-            SAMPLE_TIME_INHERITED,
-        ],
+        params: &[param("signs", Some("++"), "one + or - per input"), SAMPLE_TIME_INHERITED],
         build: build_sum,
     },
     BlockType {
@@ -71,16 +51,7 @@ pub const TYPES: &[BlockType] = &[
         category: "math",
         summary: "y = u1 / u2, elementwise.",
         doc: "y = u1 / u2. Division by zero gives ±inf or NaN, which stops the run naming this block.",
-        inputs: &[
-            PortDoc {
-                name: "u1",
-                doc: "numerator",
-            },
-            PortDoc {
-                name: "u2",
-                doc: "denominator",
-            },
-        ],
+        inputs: &[PortDoc { name: "u1", doc: "numerator" }, PortDoc { name: "u2", doc: "denominator" }],
         outputs: Y_ELEMENTWISE,
         params: &[SAMPLE_TIME_INHERITED],
         build: build_divide,
@@ -112,10 +83,7 @@ pub const TYPES: &[BlockType] = &[
         doc: "y = min(u1, …, un) elementwise; with `inputs: 1`, the smallest element of u1.",
         inputs: UN,
         outputs: Y_ELEMENTWISE,
-        params: &[
-            param("inputs", Some("2"), "number of input ports"),
-            SAMPLE_TIME_INHERITED,
-        ],
+        params: &[param("inputs", Some("2"), "number of input ports"), SAMPLE_TIME_INHERITED],
         build: build_min,
     },
     BlockType {
@@ -125,10 +93,7 @@ pub const TYPES: &[BlockType] = &[
         doc: "y = max(u1, …, un) elementwise; with `inputs: 1`, the largest element of u1.",
         inputs: UN,
         outputs: Y_ELEMENTWISE,
-        params: &[
-            param("inputs", Some("2"), "number of input ports"),
-            SAMPLE_TIME_INHERITED,
-        ],
+        params: &[param("inputs", Some("2"), "number of input ports"), SAMPLE_TIME_INHERITED],
         build: build_max,
     },
     BlockType {
@@ -139,21 +104,11 @@ pub const TYPES: &[BlockType] = &[
               max …, pi) over the scalar inputs `u1` … `un` (`u` when there is one), the time `t` and \
               the graph's parameters. Compiled once; evaluation allocates nothing. Runs continuously \
               when it reads `t`, else at the rate of its inputs.",
-        inputs: &[PortDoc {
-            name: "u1 … un",
-            doc: "scalars (`u` when inputs: 1)",
-        }],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "scalar",
-        }],
+        inputs: &[PortDoc { name: "u1 … un", doc: "scalars (`u` when inputs: 1)" }],
+        outputs: Y_SCALAR,
         params: &[
             param("expr", None, "the formula, e.g. \"u1 * sin(2*pi*t)\""),
-            param(
-                "inputs",
-                Some("1"),
-                "number of input ports (0: a function of time only)",
-            ),
+            param("inputs", Some("1"), "number of input ports (0: a function of time only)"),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_fcn,
@@ -262,18 +217,14 @@ fn build_gain(p: &mut Params) -> Result<Built, Diagnostic> {
         if cols == 0 || rows.iter().any(|r| r.len() != cols) {
             return Err(p.error("k", "matrix rows must all have the same, nonzero length"));
         }
-        let iface = Interface::new(st)
-            .input("u", Width::Fixed(cols), true)
-            .output("y", Width::Fixed(rows.len()));
+        let iface = Interface::new(st).input("u", Width::Fixed(cols), true).output("y", Width::Fixed(rows.len()));
         return Ok(Built::new(Gain::Matrix { k: rows.concat(), cols }, iface));
     }
     let k = p.opt_vector("k")?.unwrap_or_else(|| vec![1.0]);
     if k.is_empty() {
         return Err(p.error("k", "needs at least one number"));
     }
-    let iface = Interface::new(st)
-        .input("u", Width::Common, true)
-        .output("y", Width::Common);
+    let iface = Interface::new(st).input("u", Width::Common, true).output("y", Width::Common);
     Ok(Built::new(Gain::Elementwise(k), iface))
 }
 
@@ -357,13 +308,7 @@ fn build_product(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 fn build_divide(p: &mut Params) -> Result<Built, Diagnostic> {
-    nary(
-        p,
-        2,
-        Product {
-            divide: vec![false, true],
-        },
-    )
+    nary(p, 2, Product { divide: vec![false, true] })
 }
 
 /// Elementwise extremum over inputs, or over the elements of one input.
@@ -426,12 +371,7 @@ impl Block for Fcn {
 }
 
 fn build_fcn(p: &mut Params) -> Result<Built, Diagnostic> {
-    let n = p.number_where(
-        "inputs",
-        Some(1.0),
-        |v| v >= 0.0 && v.fract() == 0.0 && v < 1e4,
-        "a whole number",
-    )?;
+    let n = p.number_where("inputs", Some(1.0), |v| v >= 0.0 && v.fract() == 0.0 && v < 1e4, "a whole number")?;
     let n = n as usize;
     let Some(src) = p.raw("expr") else {
         return Err(p.block_error("missing parameter `expr`"));
@@ -453,43 +393,23 @@ fn build_fcn(p: &mut Params) -> Result<Built, Diagnostic> {
     struct Alias<'a>(VarScope<'a>);
     impl ctlgraph_core::expr::Scope for Alias<'_> {
         fn lookup(&self, name: &str) -> Option<ctlgraph_core::expr::Binding> {
-            let name = if name == "u" && self.0.vars.len() == 2 {
-                "u1"
-            } else {
-                name
-            };
+            let name = if name == "u" && self.0.vars.len() == 2 { "u1" } else { name };
             self.0.lookup(name)
         }
         fn names(&self) -> Vec<String> {
             self.0.names()
         }
     }
-    let scope = Alias(VarScope {
-        vars: &vars,
-        params: p.scope(),
-    });
+    let scope = Alias(VarScope { vars: &vars, params: p.scope() });
     let expr = Expr::parse(&text, &scope).map_err(|e| {
         let d = expr_diagnostic(&e, &pos);
-        Diagnostic {
-            message: format!("block `{}` (fcn): `expr`: {}", p.block_name(), d.message),
-            ..d
-        }
+        Diagnostic { message: format!("block `{}` (fcn): `expr`: {}", p.block_name(), d.message), ..d }
     })?;
     let reads_time = expr.uses_slot(n);
-    let default = if reads_time {
-        SampleTime::Continuous
-    } else {
-        SampleTime::Inherited
-    };
+    let default = if reads_time { SampleTime::Continuous } else { SampleTime::Inherited };
     let mut iface = Interface::new(p.sample_time(default)?);
     for name in &names {
         iface = iface.input(name, Width::Fixed(1), true);
     }
-    Ok(Built::new(
-        Fcn {
-            expr,
-            vars: vec![0.0; n + 1],
-        },
-        iface.output("y", Width::Fixed(1)),
-    ))
+    Ok(Built::new(Fcn { expr, vars: vec![0.0; n + 1] }, iface.output("y", Width::Fixed(1))))
 }

@@ -1,17 +1,8 @@
 //! Static and slew nonlinearities: saturation, dead zone, rate limiter.
 
-use crate::{SAMPLE_TIME_INHERITED, param};
-use ctlgraph_core::registry::{BlockType, Built, PortDoc};
+use crate::{SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, param};
+use ctlgraph_core::registry::{BlockType, Built};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
-
-const U: &[PortDoc] = &[PortDoc {
-    name: "u",
-    doc: "any width",
-}];
-const Y: &[PortDoc] = &[PortDoc {
-    name: "y",
-    doc: "same width as u",
-}];
 
 pub const TYPES: &[BlockType] = &[
     BlockType {
@@ -19,8 +10,8 @@ pub const TYPES: &[BlockType] = &[
         category: "nonlinear",
         summary: "Limits a signal to [lower, upper].",
         doc: "y = min(max(u, lower), upper), elementwise. NaN in, NaN out (the run then stops).",
-        inputs: U,
-        outputs: Y,
+        inputs: U_ANY,
+        outputs: Y_SAME,
         params: &[
             param("lower", Some("-1"), "lower limit (may be -inf)"),
             param("upper", Some("1"), "upper limit, >= lower (may be inf)"),
@@ -33,8 +24,8 @@ pub const TYPES: &[BlockType] = &[
         category: "nonlinear",
         summary: "Zero output inside [start, end], shifted input outside.",
         doc: "y = 0 for start <= u <= end; y = u − end above; y = u − start below (Simulink's Dead Zone).",
-        inputs: U,
-        outputs: Y,
+        inputs: U_ANY,
+        outputs: Y_SAME,
         params: &[
             param("start", Some("-0.5"), "lower edge of the dead zone"),
             param("end", Some("0.5"), "upper edge, >= start"),
@@ -52,8 +43,8 @@ pub const TYPES: &[BlockType] = &[
               default (evaluated at minor steps too); with a sample time it is a discrete limiter. As in \
               Simulink, the slew starts from the previous major step, so a step input at t₀ is already \
               partly passed at t₀.",
-        inputs: U,
-        outputs: Y,
+        inputs: U_ANY,
+        outputs: Y_SAME,
         params: &[
             param("rising", Some("1"), "largest rate of increase [units/s], > 0"),
             param("falling", Some("-1"), "most negative rate [units/s], < 0"),
@@ -140,14 +131,7 @@ pub struct RateLimiter {
 
 impl RateLimiter {
     pub fn new(rising: f64, falling: f64, initial: f64) -> Self {
-        RateLimiter {
-            rising,
-            falling,
-            initial,
-            last: vec![initial],
-            last_t: 0.0,
-            current: vec![initial],
-        }
+        RateLimiter { rising, falling, initial, last: vec![initial], last_t: 0.0, current: vec![initial] }
     }
 }
 
@@ -189,8 +173,6 @@ fn build_rate_limiter(p: &mut Params) -> Result<Built, Diagnostic> {
     let falling = p.number_where("falling", Some(-1.0), |v| v < 0.0, "negative")?;
     let initial = p.number_or("initial", 0.0)?;
     let st = p.sample_time(SampleTime::Continuous)?;
-    let iface = Interface::new(st)
-        .input("u", Width::Common, true)
-        .output("y", Width::Common);
+    let iface = Interface::new(st).input("u", Width::Common, true).output("y", Width::Common);
     Ok(Built::new(RateLimiter::new(rising, falling, initial), iface))
 }

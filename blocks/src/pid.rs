@@ -22,19 +22,10 @@ pub const TYPES: &[BlockType] = &[BlockType {
           `gain_inputs: [kp, ki]` adds input ports of those names whose values replace the parameters \
           at every step (gain scheduling, fuzzy tuning).",
     inputs: &[
-        PortDoc {
-            name: "e",
-            doc: "control error (scalar)",
-        },
-        PortDoc {
-            name: "kp, ki, kd",
-            doc: "only those listed in `gain_inputs`",
-        },
+        PortDoc { name: "e", doc: "control error (scalar)" },
+        PortDoc { name: "kp, ki, kd", doc: "only those listed in `gain_inputs`" },
     ],
-    outputs: &[PortDoc {
-        name: "u",
-        doc: "control signal (scalar)",
-    }],
+    outputs: &[PortDoc { name: "u", doc: "control signal (scalar)" }],
     params: &[
         param("kp", Some("1"), "proportional gain"),
         param("ki", Some("0"), "integral gain [1/s]"),
@@ -45,11 +36,7 @@ pub const TYPES: &[BlockType] = &[BlockType {
         param("anti_windup", Some("clamping"), "clamping | back_calculation | none"),
         param("kb", Some("1"), "back-calculation gain [1/s]"),
         param("initial", Some("0"), "initial integrator output I(0)"),
-        param(
-            "gain_inputs",
-            Some("[]"),
-            "gains read from input ports each step: any of kp, ki, kd",
-        ),
+        param("gain_inputs", Some("[]"), "gains read from input ports each step: any of kp, ki, kd"),
         param("sample_time", Some("0"), "0 continuous, T > 0 discrete"),
     ],
     build: build_pid,
@@ -170,17 +157,8 @@ impl Block for DiscretePid {
 }
 
 fn build_pid(p: &mut Params) -> Result<Built, Diagnostic> {
-    let (kp, ki, kd) = (
-        p.number_or("kp", 1.0)?,
-        p.number_or("ki", 0.0)?,
-        p.number_or("kd", 0.0)?,
-    );
-    let n = p.number_where(
-        "n",
-        Some(100.0),
-        |v| v > 0.0 && v.is_finite(),
-        "a positive filter coefficient",
-    )?;
+    let (kp, ki, kd) = (p.number_or("kp", 1.0)?, p.number_or("ki", 0.0)?, p.number_or("kd", 0.0)?);
+    let n = p.number_where("n", Some(100.0), |v| v > 0.0 && v.is_finite(), "a positive filter coefficient")?;
     let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
     let kb = p.number_or("kb", 1.0)?;
     let anti_windup = match p.choice("anti_windup", &["clamping", "back_calculation", "none"])? {
@@ -203,16 +181,7 @@ fn build_pid(p: &mut Params) -> Result<Built, Diagnostic> {
         gain_ports[i] = Some(iface_ports.len());
         iface_ports.push(name);
     }
-    let law = PidLaw {
-        kp,
-        ki,
-        kd,
-        n,
-        lower,
-        upper,
-        anti_windup,
-        gain_ports,
-    };
+    let law = PidLaw { kp, ki, kd, n, lower, upper, anti_windup, gain_ports };
     let st = p.sample_time(SampleTime::Continuous)?;
     let mut iface = Interface::new(st);
     for name in iface_ports {
@@ -220,20 +189,10 @@ fn build_pid(p: &mut Params) -> Result<Built, Diagnostic> {
     }
     let iface = iface.output("u", Width::Fixed(1));
     match st {
-        SampleTime::Discrete { period, .. } => Ok(Built::new(
-            DiscretePid {
-                law,
-                period,
-                initial,
-                integral: initial,
-                filter: 0.0,
-            },
-            iface,
-        )),
+        SampleTime::Discrete { period, .. } => {
+            Ok(Built::new(DiscretePid { law, period, initial, integral: initial, filter: 0.0 }, iface))
+        }
         SampleTime::Continuous => Ok(Built::new(ContinuousPid { law, initial }, iface)),
-        other => Err(p.error(
-            "sample_time",
-            format!("a PID is continuous (0) or discrete (T > 0), not {other}"),
-        )),
+        other => Err(p.error("sample_time", format!("a PID is continuous (0) or discrete (T > 0), not {other}"))),
     }
 }

@@ -12,20 +12,10 @@ pub const TYPES: &[BlockType] = &[
         category: "routing",
         summary: "Concatenates inputs into one vector signal.",
         doc: "y = [u1; u2; …; un]. Input widths from `widths` (default: `inputs` scalars).",
-        inputs: &[PortDoc {
-            name: "u1 … un",
-            doc: "widths as given",
-        }],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "width = sum of the input widths",
-        }],
+        inputs: &[PortDoc { name: "u1 … un", doc: "widths as given" }],
+        outputs: &[PortDoc { name: "y", doc: "width = sum of the input widths" }],
         params: &[
-            param(
-                "inputs",
-                Some("2"),
-                "number of scalar inputs (when `widths` is not given)",
-            ),
+            param("inputs", Some("2"), "number of scalar inputs (when `widths` is not given)"),
             param("widths", None, "width of each input, e.g. [2, 1]"),
             SAMPLE_TIME_INHERITED,
         ],
@@ -36,20 +26,10 @@ pub const TYPES: &[BlockType] = &[
         category: "routing",
         summary: "Splits a vector signal into parts.",
         doc: "[y1; y2; …; yn] = u. Output widths from `widths` (default: `outputs` scalars).",
-        inputs: &[PortDoc {
-            name: "u",
-            doc: "width = sum of the output widths",
-        }],
-        outputs: &[PortDoc {
-            name: "y1 … yn",
-            doc: "widths as given",
-        }],
+        inputs: &[PortDoc { name: "u", doc: "width = sum of the output widths" }],
+        outputs: &[PortDoc { name: "y1 … yn", doc: "widths as given" }],
         params: &[
-            param(
-                "outputs",
-                Some("2"),
-                "number of scalar outputs (when `widths` is not given)",
-            ),
+            param("outputs", Some("2"), "number of scalar outputs (when `widths` is not given)"),
             param("widths", None, "width of each output"),
             SAMPLE_TIME_INHERITED,
         ],
@@ -60,14 +40,8 @@ pub const TYPES: &[BlockType] = &[
         category: "routing",
         summary: "Picks elements of a vector by 1-based index.",
         doc: "y[i] = u[indices[i]], indices counted from 1 (as MATLAB); repeats allowed.",
-        inputs: &[PortDoc {
-            name: "u",
-            doc: "any width >= the largest index",
-        }],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "width = number of indices",
-        }],
+        inputs: &[PortDoc { name: "u", doc: "any width >= the largest index" }],
+        outputs: &[PortDoc { name: "y", doc: "width = number of indices" }],
         params: &[param("indices", None, "list of 1-based indices"), SAMPLE_TIME_INHERITED],
         build: build_selector,
     },
@@ -78,23 +52,11 @@ pub const TYPES: &[BlockType] = &[
         doc: "y = u1 if control passes the criterion, else u2. Criteria: `>=` (control >= threshold), \
               `>` (control > threshold), `!=0` (control ≠ 0). Ports in Simulink's order: u1, control, u2.",
         inputs: &[
-            PortDoc {
-                name: "u1",
-                doc: "passed when the criterion holds",
-            },
-            PortDoc {
-                name: "control",
-                doc: "scalar",
-            },
-            PortDoc {
-                name: "u2",
-                doc: "passed otherwise",
-            },
+            PortDoc { name: "u1", doc: "passed when the criterion holds" },
+            PortDoc { name: "control", doc: "scalar" },
+            PortDoc { name: "u2", doc: "passed otherwise" },
         ],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "width of u1/u2",
-        }],
+        outputs: &[PortDoc { name: "y", doc: "width of u1/u2" }],
         params: &[
             param("threshold", Some("0"), "compared with control"),
             param("criterion", Some(">="), ">= | > | !=0"),
@@ -110,14 +72,8 @@ pub const TYPES: &[BlockType] = &[
               time: no run-time cost. Its `inport` blocks are this block's inputs and its `outport` \
               blocks its outputs, named after them (`ctrl.r`, `ctrl.u`). `parameters` overrides the \
               subsystem's own parameters; values are expressions over this file's parameters.",
-        inputs: &[PortDoc {
-            name: "(inports)",
-            doc: "one per inport block of the file",
-        }],
-        outputs: &[PortDoc {
-            name: "(outports)",
-            doc: "one per outport block of the file",
-        }],
+        inputs: &[PortDoc { name: "(inports)", doc: "one per inport block of the file" }],
+        outputs: &[PortDoc { name: "(outports)", doc: "one per outport block of the file" }],
         params: &[
             param("file", None, "graph file, relative to this one"),
             param("parameters", Some("{}"), "overrides of the subsystem's parameters"),
@@ -131,10 +87,7 @@ pub const TYPES: &[BlockType] = &[
         doc: "Inside a subsystem file: the signal wired to the subsystem's port of this name. Resolved \
               at compile time; costs nothing at run time.",
         inputs: &[],
-        outputs: &[PortDoc {
-            name: "out",
-            doc: "the outer signal",
-        }],
+        outputs: &[PortDoc { name: "out", doc: "the outer signal" }],
         params: &[],
         build: structural,
     },
@@ -143,10 +96,7 @@ pub const TYPES: &[BlockType] = &[
         category: "structure",
         summary: "An output of a subsystem (the block's name is the port's name).",
         doc: "Inside a subsystem file: wire the signal to export into it. Resolved at compile time.",
-        inputs: &[PortDoc {
-            name: "in",
-            doc: "the signal to export",
-        }],
+        inputs: &[PortDoc { name: "in", doc: "the signal to export" }],
         outputs: &[],
         params: &[],
         build: structural,

@@ -1,6 +1,6 @@
 //! Sources: constant, step, ramp, sine, pulse, clock.
 
-use crate::{SAMPLE_TIME_CONTINUOUS, param};
+use crate::{SAMPLE_TIME_CONTINUOUS, Y_SCALAR, param};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 
@@ -11,10 +11,7 @@ pub const TYPES: &[BlockType] = &[
         summary: "A constant value (scalar or vector).",
         doc: "y = value. Computed once, at the start of the run.",
         inputs: &[],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "the value; width = number of elements of `value`",
-        }],
+        outputs: &[PortDoc { name: "y", doc: "the value; width = number of elements of `value`" }],
         params: &[param("value", Some("1"), "a number or a list of numbers")],
         build: build_constant,
     },
@@ -25,10 +22,7 @@ pub const TYPES: &[BlockType] = &[
         doc: "y = initial for t < at, y = value for t >= at. The simulator puts a major step exactly \
               at `at`; the solver's stages before it see `initial`, after it `value`.",
         inputs: &[],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "scalar",
-        }],
+        outputs: Y_SCALAR,
         params: &[
             param("at", Some("0"), "switching time [s]"),
             param("initial", Some("0"), "value before `at`"),
@@ -43,10 +37,7 @@ pub const TYPES: &[BlockType] = &[
         summary: "A ramp of given slope starting at time `start`.",
         doc: "y = initial for t < start, y = initial + slope·(t − start) for t >= start.",
         inputs: &[],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "scalar",
-        }],
+        outputs: Y_SCALAR,
         params: &[
             param("slope", Some("1"), "units per second"),
             param("start", Some("0"), "start time [s]"),
@@ -61,10 +52,7 @@ pub const TYPES: &[BlockType] = &[
         summary: "A sine wave.",
         doc: "y = bias + amplitude·sin(2π·frequency·t + phase). `frequency` is in Hz (not rad/s).",
         inputs: &[],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "scalar",
-        }],
+        outputs: Y_SCALAR,
         params: &[
             param("amplitude", Some("1"), "peak value"),
             param("frequency", Some("1"), "[Hz]"),
@@ -81,18 +69,11 @@ pub const TYPES: &[BlockType] = &[
         doc: "y = amplitude during the first `duty`·period of every period from `delay` on, else 0. \
               Every edge is an event: the simulator steps exactly onto it.",
         inputs: &[],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "scalar",
-        }],
+        outputs: Y_SCALAR,
         params: &[
             param("amplitude", Some("1"), "pulse height"),
             param("period", Some("1"), "[s], > 0"),
-            param(
-                "duty",
-                Some("0.5"),
-                "fraction of the period the pulse is high, in (0, 1)",
-            ),
+            param("duty", Some("0.5"), "fraction of the period the pulse is high, in (0, 1)"),
             param("delay", Some("0"), "time of the first rising edge [s]"),
             SAMPLE_TIME_CONTINUOUS,
         ],
@@ -104,10 +85,7 @@ pub const TYPES: &[BlockType] = &[
         summary: "The simulation time.",
         doc: "y = t.",
         inputs: &[],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "scalar",
-        }],
+        outputs: Y_SCALAR,
         params: &[SAMPLE_TIME_CONTINUOUS],
         build: build_clock,
     },
@@ -136,10 +114,7 @@ fn scalar_source<F: Fn(&Io) -> f64 + Send + 'static>(
     f: F,
 ) -> Result<Built, Diagnostic> {
     let st = p.sample_time(SampleTime::Continuous)?;
-    Ok(Built::new(
-        TimeFn { f, events },
-        Interface::new(st).output("y", Width::Fixed(1)),
-    ))
+    Ok(Built::new(TimeFn { f, events }, Interface::new(st).output("y", Width::Fixed(1))))
 }
 
 fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -164,18 +139,9 @@ fn build_step(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 fn build_ramp(p: &mut Params) -> Result<Built, Diagnostic> {
-    let (slope, start, initial) = (
-        p.number_or("slope", 1.0)?,
-        p.number_or("start", 0.0)?,
-        p.number_or("initial", 0.0)?,
-    );
-    scalar_source(p, vec![start], move |io| {
-        if io.t > start {
-            initial + slope * (io.t - start)
-        } else {
-            initial
-        }
-    })
+    let (slope, start, initial) =
+        (p.number_or("slope", 1.0)?, p.number_or("start", 0.0)?, p.number_or("initial", 0.0)?);
+    scalar_source(p, vec![start], move |io| if io.t > start { initial + slope * (io.t - start) } else { initial })
 }
 
 fn build_sine(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -195,12 +161,7 @@ fn build_pulse(p: &mut Params) -> Result<Built, Diagnostic> {
     let duty = p.number_where("duty", Some(0.5), |v| v > 0.0 && v < 1.0, "strictly between 0 and 1")?;
     let delay = p.number_or("delay", 0.0)?;
     let st = p.sample_time(SampleTime::Continuous)?;
-    let pulse = Pulse {
-        amplitude,
-        period,
-        high: duty * period,
-        delay,
-    };
+    let pulse = Pulse { amplitude, period, high: duty * period, delay };
     Ok(Built::new(pulse, Interface::new(st).output("y", Width::Fixed(1))))
 }
 
@@ -227,11 +188,7 @@ impl Block for Pulse {
         for cand in [k + 1.0, k, k - 1.0] {
             let rise = self.delay + cand * self.period;
             if cand >= 0.0 && io.reached(rise) {
-                y = if io.reached(rise + self.high) {
-                    0.0
-                } else {
-                    self.amplitude
-                };
+                y = if io.reached(rise + self.high) { 0.0 } else { self.amplitude };
                 break;
             }
         }

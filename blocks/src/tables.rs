@@ -1,8 +1,8 @@
 //! Tabulated data: 1-D lookup tables and time series read from CSV files,
 //! both by linear interpolation.
 
-use crate::{SAMPLE_TIME_CONTINUOUS, SAMPLE_TIME_INHERITED, param};
-use ctlgraph_core::registry::{BlockType, Built, PortDoc};
+use crate::{SAMPLE_TIME_CONTINUOUS, SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, Y_SCALAR, param};
+use ctlgraph_core::registry::{BlockType, Built};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 
 pub const TYPES: &[BlockType] = &[
@@ -12,14 +12,8 @@ pub const TYPES: &[BlockType] = &[
         summary: "Piecewise-linear map y = f(u) from breakpoints.",
         doc: "Linear interpolation between (x[i], y[i]); x strictly increasing. Outside [x0, xn]: \
               `clamp` holds the end values, `linear` extends the first/last segment. Elementwise.",
-        inputs: &[PortDoc {
-            name: "u",
-            doc: "any width",
-        }],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "same width as u",
-        }],
+        inputs: U_ANY,
+        outputs: Y_SAME,
         params: &[
             param("x", None, "breakpoints, strictly increasing, at least two"),
             param("y", None, "table values, one per breakpoint"),
@@ -36,10 +30,7 @@ pub const TYPES: &[BlockType] = &[
               graph file. Times must be non-decreasing; a repeated time is a jump. Outside the data: \
               `hold` keeps the end values, `linear` extends the end segments, `zero` outputs 0.",
         inputs: &[],
-        outputs: &[PortDoc {
-            name: "y",
-            doc: "scalar",
-        }],
+        outputs: Y_SCALAR,
         params: &[
             param("file", None, "CSV file with a header row"),
             param("column", None, "header of the value column"),
@@ -78,9 +69,7 @@ impl Table {
             ));
         }
         if let Some(v) = x.iter().chain(&y).find(|v| !v.is_finite()) {
-            return Err(format!(
-                "{v} in the data: every breakpoint and value must be a finite number"
-            ));
+            return Err(format!("{v} in the data: every breakpoint and value must be a finite number"));
         }
         if let Some(i) = x.windows(2).position(|w| w[1] < w[0]) {
             return Err(format!("breakpoints must increase: {} then {}", x[i], x[i + 1]));
@@ -125,10 +114,7 @@ impl Block for Lookup {
 fn build_lookup(p: &mut Params) -> Result<Built, Diagnostic> {
     let x = p.vector("x")?;
     if let Some(i) = x.windows(2).position(|w| w[1] <= w[0]) {
-        return Err(p.error(
-            "x",
-            format!("breakpoints must be strictly increasing: {} then {}", x[i], x[i + 1]),
-        ));
+        return Err(p.error("x", format!("breakpoints must be strictly increasing: {} then {}", x[i], x[i + 1])));
     }
     let y = p.vector("y")?;
     let outside = match p.choice("extrapolation", &["clamp", "linear"])? {
@@ -137,9 +123,7 @@ fn build_lookup(p: &mut Params) -> Result<Built, Diagnostic> {
     };
     let table = Table::new(x, y, outside).map_err(|m| p.error("y", m))?;
     let st = p.sample_time(SampleTime::Inherited)?;
-    let iface = Interface::new(st)
-        .input("u", Width::Common, true)
-        .output("y", Width::Common);
+    let iface = Interface::new(st).input("u", Width::Common, true).output("y", Width::Common);
     Ok(Built::new(Lookup(table), iface))
 }
 
@@ -164,10 +148,7 @@ fn build_from_csv(p: &mut Params) -> Result<Built, Diagnostic> {
     let (ts, ys) = read_columns(&path, time, column).map_err(|m| p.error("file", m))?;
     let table = Table::new(ts, ys, outside).map_err(|m| p.error("file", format!("`{}`: {m}", path.display())))?;
     let st = p.sample_time(SampleTime::Continuous)?;
-    Ok(Built::new(
-        Series(table),
-        Interface::new(st).output("y", Width::Fixed(1)),
-    ))
+    Ok(Built::new(Series(table), Interface::new(st).output("y", Width::Fixed(1))))
 }
 
 /// Reads two columns by header name; errors name the file, row and column.
@@ -187,8 +168,7 @@ fn read_columns(path: &std::path::Path, time: &str, column: &str) -> Result<(Vec
         let record = record.map_err(|e| format!("`{shown}`: {e}"))?;
         let num = |i: usize, name: &str| -> Result<f64, String> {
             let cell = record.get(i).unwrap_or("").trim();
-            cell.parse::<f64>()
-                .map_err(|_| format!("`{shown}` row {}: `{name}` is `{cell}`, not a number", row + 2))
+            cell.parse::<f64>().map_err(|_| format!("`{shown}` row {}: `{name}` is `{cell}`, not a number", row + 2))
         };
         ts.push(num(ti, time)?);
         ys.push(num(yi, column)?);
@@ -203,19 +183,10 @@ mod tests {
     #[test]
     fn interpolation_and_extrapolation() {
         let t = Table::new(vec![0.0, 1.0, 3.0], vec![0.0, 2.0, 0.0], Outside::Clamp).unwrap();
-        assert_eq!(
-            [t.eval(-1.0), t.eval(0.5), t.eval(1.0), t.eval(2.0), t.eval(4.0)],
-            [0.0, 1.0, 2.0, 1.0, 0.0]
-        );
-        let l = Table {
-            outside: Outside::Linear,
-            ..t.clone()
-        };
+        assert_eq!([t.eval(-1.0), t.eval(0.5), t.eval(1.0), t.eval(2.0), t.eval(4.0)], [0.0, 1.0, 2.0, 1.0, 0.0]);
+        let l = Table { outside: Outside::Linear, ..t.clone() };
         assert_eq!([l.eval(-1.0), l.eval(4.0)], [-2.0, -1.0]);
-        let z = Table {
-            outside: Outside::Zero,
-            ..t
-        };
+        let z = Table { outside: Outside::Zero, ..t };
         assert_eq!([z.eval(-0.1), z.eval(3.0), z.eval(3.1)], [0.0, 0.0, 0.0]);
     }
 

@@ -77,29 +77,18 @@ pub struct Interface {
 
 impl Interface {
     pub fn new(sample_time: SampleTime) -> Self {
-        Interface {
-            inputs: Vec::new(),
-            outputs: Vec::new(),
-            sample_time,
-        }
+        Interface { inputs: Vec::new(), outputs: Vec::new(), sample_time }
     }
 
     /// Adds an input port.
     pub fn input(mut self, name: &str, width: Width, feedthrough: bool) -> Self {
-        self.inputs.push(InputPort {
-            name: name.to_string(),
-            width,
-            feedthrough,
-        });
+        self.inputs.push(InputPort { name: name.to_string(), width, feedthrough });
         self
     }
 
     /// Adds an output port.
     pub fn output(mut self, name: &str, width: Width) -> Self {
-        self.outputs.push(OutputPort {
-            name: name.to_string(),
-            width,
-        });
+        self.outputs.push(OutputPort { name: name.to_string(), width });
         self
     }
 
@@ -139,14 +128,7 @@ impl<'a> Io<'a> {
         inputs: &'a [Port],
         outputs: &'a [Port],
     ) -> Self {
-        Io {
-            t,
-            x,
-            left_limit,
-            signals,
-            inputs,
-            outputs,
-        }
+        Io { t, x, left_limit, signals, inputs, outputs }
     }
 
     /// All elements of input `port`.

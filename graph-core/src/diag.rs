@@ -19,11 +19,7 @@ impl Pos {
 
     /// The position `n` characters further along the same line.
     pub fn shifted(&self, n: usize) -> Pos {
-        Pos {
-            file: self.file.clone(),
-            line: self.line,
-            col: self.col + n as u32,
-        }
+        Pos { file: self.file.clone(), line: self.line, col: self.col + n as u32 }
     }
 }
 
@@ -45,32 +41,17 @@ pub struct Diagnostic {
 
 impl Diagnostic {
     pub fn at(pos: &Pos, message: impl Into<String>) -> Self {
-        Diagnostic {
-            pos: Some(pos.clone()),
-            file: None,
-            message: message.into(),
-            hint: None,
-        }
+        Diagnostic { pos: Some(pos.clone()), file: None, message: message.into(), hint: None }
     }
 
     /// An error about a whole file (cannot be read, for example).
     pub fn in_file(file: &str, message: impl Into<String>) -> Self {
-        Diagnostic {
-            pos: None,
-            file: Some(file.into()),
-            message: message.into(),
-            hint: None,
-        }
+        Diagnostic { pos: None, file: Some(file.into()), message: message.into(), hint: None }
     }
 
     /// An error with no file to point at (a command-line argument).
     pub fn plain(message: impl Into<String>) -> Self {
-        Diagnostic {
-            pos: None,
-            file: None,
-            message: message.into(),
-            hint: None,
-        }
+        Diagnostic { pos: None, file: None, message: message.into(), hint: None }
     }
 
     pub fn with_hint(mut self, hint: impl Into<String>) -> Self {
@@ -80,11 +61,7 @@ impl Diagnostic {
 
     /// Adds a hint unless there is one already.
     pub fn or_hint(self, hint: impl Into<String>) -> Self {
-        if self.hint.is_some() {
-            self
-        } else {
-            self.with_hint(hint)
-        }
+        if self.hint.is_some() { self } else { self.with_hint(hint) }
     }
 
     /// Adds a "did you mean" hint when a candidate is close enough to `got`.

@@ -80,16 +80,12 @@ pub fn load_str(text: &str, file: Arc<str>, overrides: &[(String, String)]) -> R
     let known: Vec<&str> = graph.parameters.iter().map(|(k, _)| k.name.as_str()).collect();
     for (name, _) in overrides {
         if !known.contains(&name.as_str()) {
-            return Err(
-                Diagnostic::plain(format!("--set {name}: {file} has no parameter `{name}`"))
-                    .suggest(name, known.iter().copied()),
-            );
+            return Err(Diagnostic::plain(format!("--set {name}: {file} has no parameter `{name}`"))
+                .suggest(name, known.iter().copied()));
         }
     }
-    let ovr: Vec<(String, Override, Option<Pos>)> = overrides
-        .iter()
-        .map(|(n, v)| (n.clone(), Override::Text(v.clone()), None))
-        .collect();
+    let ovr: Vec<(String, Override, Option<Pos>)> =
+        overrides.iter().map(|(n, v)| (n.clone(), Override::Text(v.clone()), None)).collect();
     let scope = Arc::new(eval_parameters(&graph.parameters, &ovr)?);
     let sim = sim_config(graph.simulation.as_ref(), &scope)?;
     let dir = Arc::new(Path::new(&*file).parent().map(Path::to_path_buf).unwrap_or_default());
@@ -134,10 +130,8 @@ fn eval_parameters(
             }
             None => match &value.kind {
                 Kind::Num(v) => *v,
-                Kind::Str(s) => eval_number(s, &value.pos, &scope).map_err(|d| Diagnostic {
-                    message: format!("parameter `{}`: {}", key.name, d.message),
-                    ..d
-                })?,
+                Kind::Str(s) => eval_number(s, &value.pos, &scope)
+                    .map_err(|d| Diagnostic { message: format!("parameter `{}`: {}", key.name, d.message), ..d })?,
                 _ => {
                     return Err(Diagnostic::at(
                         &value.pos,
@@ -169,10 +163,7 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
         match &v.kind {
             Kind::Num(x) => Ok(*x),
             Kind::Str(s) => eval_number(s, &v.pos, scope),
-            _ => Err(Diagnostic::at(
-                &v.pos,
-                format!("{what} must be a number, found {}", v.describe()),
-            )),
+            _ => Err(Diagnostic::at(&v.pos, format!("{what} must be a number, found {}", v.describe()))),
         }
     };
     let positive = |v: &Yaml, what: &str| -> Result<f64, Diagnostic> {
@@ -180,10 +171,7 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
         if x > 0.0 && x.is_finite() {
             Ok(x)
         } else {
-            Err(Diagnostic::at(
-                &v.pos,
-                format!("{what} must be a positive number, got {x}"),
-            ))
+            Err(Diagnostic::at(&v.pos, format!("{what} must be a positive number, got {x}")))
         }
     };
     let stop = match yaml::lookup(entries, "stop") {
@@ -194,10 +182,7 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
         Some(v) => {
             let s = num(v, "`simulation.seed`")?;
             if s < 0.0 || s.fract() != 0.0 || s > 9.0e15 {
-                return Err(Diagnostic::at(
-                    &v.pos,
-                    format!("`seed` must be a whole number >= 0, got {s}"),
-                ));
+                return Err(Diagnostic::at(&v.pos, format!("`seed` must be a whole number >= 0, got {s}")));
             }
             s as u64
         }
@@ -221,9 +206,7 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
             },
         };
     let opt = |key: &str| -> Result<Option<f64>, Diagnostic> {
-        yaml::lookup(solver_entries, key)
-            .map(|v| positive(v, &format!("`solver.{key}`")))
-            .transpose()
+        yaml::lookup(solver_entries, key).map(|v| positive(v, &format!("`solver.{key}`"))).transpose()
     };
     let fixed_step = |name: &str| -> Result<f64, Diagnostic> {
         opt("step")?.ok_or_else(|| {
@@ -247,15 +230,9 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
                 initial_step: opt("initial_step")?,
             }
         }
-        "rk4" => Method::Rk4 {
-            step: fixed_step("rk4")?,
-        },
-        "heun" => Method::Heun {
-            step: fixed_step("heun")?,
-        },
-        "euler" => Method::Euler {
-            step: fixed_step("euler")?,
-        },
+        "rk4" => Method::Rk4 { step: fixed_step("rk4")? },
+        "heun" => Method::Heun { step: fixed_step("heun")? },
+        "euler" => Method::Euler { step: fixed_step("euler")? },
         other => {
             let pos = method_pos.unwrap_or_else(|| Pos::new("?".into(), 0, 0));
             return Err(Diagnostic::at(&pos, format!("unknown solver method `{other}`"))
@@ -266,10 +243,7 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
     if !method.is_adaptive() {
         for key in ["rtol", "atol", "max_step", "initial_step"] {
             if let Some(v) = yaml::lookup(solver_entries, key) {
-                return Err(Diagnostic::at(
-                    &v.pos,
-                    format!("`{key}` applies to dopri5, not to `{method_name}`"),
-                ));
+                return Err(Diagnostic::at(&v.pos, format!("`{key}` applies to dopri5, not to `{method_name}`")));
             }
         }
     }
@@ -279,11 +253,9 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
 fn check_keys(entries: &[(Key, Yaml)], known: &[&str], section: &str) -> Result<(), Diagnostic> {
     for (k, _) in entries {
         if !known.contains(&k.name.as_str()) {
-            return Err(
-                Diagnostic::at(&k.pos, format!("unknown key `{}` in `{section}`", k.name))
-                    .suggest(&k.name, known.iter().copied())
-                    .or_hint(format!("`{section}` takes: {}", known.join(", "))),
-            );
+            return Err(Diagnostic::at(&k.pos, format!("unknown key `{}` in `{section}`", k.name))
+                .suggest(&k.name, known.iter().copied())
+                .or_hint(format!("`{section}` takes: {}", known.join(", "))));
         }
     }
     Ok(())
@@ -291,13 +263,7 @@ fn check_keys(entries: &[(Key, Yaml)], known: &[&str], section: &str) -> Result<
 
 /// A subsystem's ports: the names of its inport and outport blocks, in order.
 fn sub_ports(g: &GraphFile) -> (Vec<String>, Vec<String>) {
-    let of = |ty: &str| {
-        g.blocks
-            .iter()
-            .filter(|b| b.type_name == ty)
-            .map(|b| b.name.clone())
-            .collect()
-    };
+    let of = |ty: &str| g.blocks.iter().filter(|b| b.type_name == ty).map(|b| b.name.clone()).collect();
     (of(INPORT), of(OUTPORT))
 }
 
@@ -313,12 +279,7 @@ fn expand(
     for b in &g.blocks {
         let path = format!("{prefix}{}", b.name);
         if b.type_name != SUBSYSTEM {
-            out.blocks.push(FlatBlock {
-                path,
-                spec: b.clone(),
-                scope: scope.clone(),
-                dir: dir.clone(),
-            });
+            out.blocks.push(FlatBlock { path, spec: b.clone(), scope: scope.clone(), dir: dir.clone() });
             continue;
         }
         let inner = load_subsystem(b, &path, &scope, &dir, out, stack)?;
@@ -332,26 +293,16 @@ fn expand(
                 .suggest(&ep.block, names.iter().copied()));
         }
         let Some((ins, outs)) = subs.get(ep.block.as_str()) else {
-            return Ok(Endpoint {
-                block: format!("{prefix}{}", ep.block),
-                ..ep.clone()
-            });
+            return Ok(Endpoint { block: format!("{prefix}{}", ep.block), ..ep.clone() });
         };
         let (ports, side) = if is_src { (outs, "outport") } else { (ins, "inport") };
         let port = resolve_sub_port(ep, ports, side)?;
-        Ok(Endpoint {
-            block: format!("{prefix}{}/{port}", ep.block),
-            port: None,
-            pos: ep.pos.clone(),
-        })
+        Ok(Endpoint { block: format!("{prefix}{}/{port}", ep.block), port: None, pos: ep.pos.clone() })
     };
     for w in &g.wires {
         let src = resolve(&w.src, true)?;
         for d in &w.dsts {
-            out.wires.push(FlatWire {
-                src: src.clone(),
-                dst: resolve(d, false)?,
-            });
+            out.wires.push(FlatWire { src: src.clone(), dst: resolve(d, false)? });
         }
     }
     Ok(())
@@ -367,12 +318,7 @@ pub fn resolve_sub_port<'a>(ep: &Endpoint, ports: &'a [String], side: &str) -> R
         None if ports.len() == 1 => Ok(&ports[0]),
         None => Err(Diagnostic::at(
             &ep.pos,
-            format!(
-                "subsystem `{}` has {} {side}s: name one as `{}.PORT`",
-                ep.block,
-                ports.len(),
-                ep.block
-            ),
+            format!("subsystem `{}` has {} {side}s: name one as `{}.PORT`", ep.block, ports.len(), ep.block),
         )
         .with_hint(format!("{side}s: {}", ports.join(", ")))),
     }
@@ -401,10 +347,7 @@ fn load_subsystem(
         .map_err(|e| Diagnostic::at(&file_v.pos, format!("{what}: cannot read `{sub_file}`: {e}")))?;
     let canon = canonical(&sub_path);
     if stack.contains(&canon) {
-        return Err(Diagnostic::at(
-            &file_v.pos,
-            format!("{what}: `{sub_file}` includes itself"),
-        ));
+        return Err(Diagnostic::at(&file_v.pos, format!("{what}: `{sub_file}` includes itself")));
     }
     let sub = GraphFile::parse(&text, sub_file.clone())?;
     let known: Vec<&str> = sub.parameters.iter().map(|(k, _)| k.name.as_str()).collect();
@@ -412,19 +355,14 @@ fn load_subsystem(
     if let Some(p) = yaml::lookup(&b.params, "parameters") {
         for (k, v) in p.expect_map(&format!("{what}: `parameters`"))? {
             if !known.contains(&k.name.as_str()) {
-                return Err(
-                    Diagnostic::at(&k.pos, format!("{what}: `{sub_file}` has no parameter `{}`", k.name))
-                        .suggest(&k.name, known.iter().copied()),
-                );
+                return Err(Diagnostic::at(&k.pos, format!("{what}: `{sub_file}` has no parameter `{}`", k.name))
+                    .suggest(&k.name, known.iter().copied()));
             }
             let value = match &v.kind {
                 Kind::Num(x) => *x,
                 Kind::Str(s) => eval_number(s, &v.pos, scope)?,
                 _ => {
-                    return Err(Diagnostic::at(
-                        &v.pos,
-                        format!("{what}: parameter `{}` must be a number", k.name),
-                    ));
+                    return Err(Diagnostic::at(&v.pos, format!("{what}: parameter `{}` must be a number", k.name)));
                 }
             };
             overrides.push((k.name.clone(), Override::Value(value), Some(k.pos.clone())));

@@ -35,16 +35,7 @@ impl<'a> Params<'a> {
         docs: &'static [ParamDoc],
     ) -> Self {
         let used = entries.iter().map(|(k, _)| k.name == "type").collect();
-        Params {
-            block,
-            type_name,
-            block_pos,
-            entries,
-            scope,
-            dir,
-            docs,
-            used,
-        }
+        Params { block, type_name, block_pos, entries, scope, dir, docs, used }
     }
 
     /// The block's full name (`outer/inner` inside subsystems).
@@ -72,23 +63,13 @@ impl<'a> Params<'a> {
 
     /// An error about `key` of this block, at the key's value if present.
     pub fn error(&self, key: &str, message: impl std::fmt::Display) -> Diagnostic {
-        let pos = self
-            .entries
-            .iter()
-            .find(|(k, _)| k.name == key)
-            .map_or(self.block_pos, |(_, v)| &v.pos);
-        Diagnostic::at(
-            pos,
-            format!("block `{}` ({}): `{key}`: {message}", self.block, self.type_name),
-        )
+        let pos = self.entries.iter().find(|(k, _)| k.name == key).map_or(self.block_pos, |(_, v)| &v.pos);
+        Diagnostic::at(pos, format!("block `{}` ({}): `{key}`: {message}", self.block, self.type_name))
     }
 
     /// An error about the block as a whole, at its name.
     pub fn block_error(&self, message: impl std::fmt::Display) -> Diagnostic {
-        Diagnostic::at(
-            self.block_pos,
-            format!("block `{}` ({}): {message}", self.block, self.type_name),
-        )
+        Diagnostic::at(self.block_pos, format!("block `{}` ({}): {message}", self.block, self.type_name))
     }
 
     fn missing(&self, key: &str) -> Diagnostic {
@@ -140,11 +121,7 @@ impl<'a> Params<'a> {
             Some(d) => self.number_or(key, d)?,
             None => self.number(key)?,
         };
-        if ok(v) {
-            Ok(v)
-        } else {
-            Err(self.error(key, format!("must be {requirement}, got {v}")))
-        }
+        if ok(v) { Ok(v) } else { Err(self.error(key, format!("must be {requirement}, got {v}"))) }
     }
 
     /// A positive whole number.
@@ -216,10 +193,7 @@ impl<'a> Params<'a> {
                     }
                 }
                 Kind::Seq(_) => {
-                    return Err(Diagnostic::at(
-                        &item.pos,
-                        "a complex root is written [re, im]".to_string(),
-                    ));
+                    return Err(Diagnostic::at(&item.pos, "a complex root is written [re, im]".to_string()));
                 }
                 _ => out.push((self.number_value(key, item)?, 0.0)),
             }
@@ -247,8 +221,7 @@ impl<'a> Params<'a> {
             return Ok(options[0]);
         };
         options.iter().copied().find(|o| *o == s).ok_or_else(|| {
-            self.error(key, format!("`{s}` is not one of: {}", options.join(", ")))
-                .suggest(s, options.iter().copied())
+            self.error(key, format!("`{s}` is not one of: {}", options.join(", "))).suggest(s, options.iter().copied())
         })
     }
 
@@ -302,9 +275,7 @@ impl<'a> Params<'a> {
             p if p > 0.0 && p.is_finite() && (0.0..p).contains(&offset) => {
                 Ok(SampleTime::Discrete { period: p, offset })
             }
-            _ => Err(self
-                .error(key, format!("bad sample time [{period}, {offset}]"))
-                .with_hint(hint)),
+            _ => Err(self.error(key, format!("bad sample time [{period}, {offset}]")).with_hint(hint)),
         }
     }
 
@@ -317,10 +288,7 @@ impl<'a> Params<'a> {
         match self.sample_time(SampleTime::Inherited)? {
             st @ SampleTime::Discrete { .. } => Ok(st),
             other => Err(self
-                .error(
-                    "sample_time",
-                    format!("this block is discrete: needs a period T > 0, got {other}"),
-                )
+                .error("sample_time", format!("this block is discrete: needs a period T > 0, got {other}"))
                 .with_hint("write `sample_time: T` or `sample_time: [T, offset]`")),
         }
     }
@@ -330,10 +298,7 @@ impl<'a> Params<'a> {
         let known: Vec<&str> = self.docs.iter().map(|d| d.name).collect();
         for ((key, _), used) in self.entries.iter().zip(&self.used) {
             if !used {
-                let message = format!(
-                    "block `{}` ({}): unknown parameter `{}`",
-                    self.block, self.type_name, key.name
-                );
+                let message = format!("block `{}` ({}): unknown parameter `{}`", self.block, self.type_name, key.name);
                 return Err(Diagnostic::at(&key.pos, message)
                     .suggest(&key.name, known.iter().copied())
                     .or_hint(format!("{} takes: {}", self.type_name, known.join(", "))));
@@ -346,8 +311,7 @@ impl<'a> Params<'a> {
 /// Evaluates an expression string to a number; errors point inside it.
 pub fn eval_number(src: &str, pos: &Pos, scope: &[(String, f64)]) -> Result<f64, Diagnostic> {
     let expr = Expr::parse(src, &Constants(scope)).map_err(|e| expr_diagnostic(&e, pos))?;
-    expr.constant()
-        .ok_or_else(|| Diagnostic::at(pos, format!("`{src}` is not a constant")))
+    expr.constant().ok_or_else(|| Diagnostic::at(pos, format!("`{src}` is not a constant")))
 }
 
 /// A positioned diagnostic for an error inside an expression written at `pos`.
@@ -373,10 +337,6 @@ impl Scope for VarScope<'_> {
         }
     }
     fn names(&self) -> Vec<String> {
-        self.vars
-            .iter()
-            .map(|v| v.to_string())
-            .chain(Constants(self.params).names())
-            .collect()
+        self.vars.iter().map(|v| v.to_string()).chain(Constants(self.params).names()).collect()
     }
 }

@@ -31,10 +31,7 @@ pub struct Built {
 
 impl Built {
     pub fn new(block: impl Block + 'static, iface: Interface) -> Self {
-        Built {
-            block: Box::new(block),
-            iface,
-        }
+        Built { block: Box::new(block), iface }
     }
 }
 

@@ -97,28 +97,16 @@ impl Simulator {
         let stop = stop.unwrap_or(model.sim.stop);
         let method = model.sim.method;
         let grid_step = if method.is_adaptive() { 0.0 } else { method.max_step() };
-        let clocks: Vec<Clock> = model
-            .clocks
-            .iter()
-            .map(|&(period, offset)| Clock {
-                period,
-                offset,
-                tick: 0,
-                hit: false,
-            })
-            .collect();
+        let clocks: Vec<Clock> =
+            model.clocks.iter().map(|&(period, offset)| Clock { period, offset, tick: 0, hit: false }).collect();
         let smallest = clocks
             .iter()
             .map(|c| c.period)
             .chain([stop, method.max_step()])
             .filter(|&p| p > 0.0)
             .fold(f64::INFINITY, f64::min);
-        let continuous = (0..model.meta.len())
-            .filter(|&i| model.meta[i].rate == Rate::Continuous)
-            .collect();
-        let stateful = (0..model.meta.len())
-            .filter(|&i| !model.meta[i].states.is_empty())
-            .collect();
+        let continuous = (0..model.meta.len()).filter(|&i| model.meta[i].rate == Rate::Continuous).collect();
+        let stateful = (0..model.meta.len()).filter(|&i| !model.meta[i].states.is_empty()).collect();
         let mut sim = Simulator {
             signals: vec![0.0; model.signal_len],
             x: vec![0.0; model.n_states],
@@ -184,10 +172,7 @@ impl Simulator {
     }
 
     pub fn stats(&self) -> RunStats {
-        RunStats {
-            major_steps: self.major_steps,
-            solver: self.integ.stats(),
-        }
+        RunStats { major_steps: self.major_steps, solver: self.integ.stats() }
     }
 
     /// Whether the run has reached its stop time.
@@ -208,39 +193,39 @@ impl Simulator {
         any
     }
 
+    /// Runs `output` (or `update`) of every block due now, in execution
+    /// order: continuous blocks always, discrete blocks at their hits,
+    /// constant blocks on the first output pass only.
+    fn sweep(&mut self, update: bool) {
+        let m = &mut self.model;
+        for (i, block) in m.blocks.iter_mut().enumerate() {
+            let slot = &m.slots[i];
+            let due = match slot.rate {
+                Rate::Continuous => true,
+                Rate::Constant => self.first && !update,
+                Rate::Discrete(c) => self.clocks[c].hit,
+            };
+            if due {
+                let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
+                if update {
+                    block.update(&mut io);
+                } else {
+                    block.output(&mut io);
+                }
+            }
+        }
+    }
+
     /// Step (1) of a major step: outputs in execution order, then a check
     /// that every signal is finite.
     pub fn outputs(&mut self) -> Result<(), SimError> {
-        let m = &mut self.model;
-        for (i, block) in m.blocks.iter_mut().enumerate() {
-            let meta = &m.slots[i];
-            let runs = match meta.rate {
-                Rate::Continuous => true,
-                Rate::Constant => self.first,
-                Rate::Discrete(c) => self.clocks[c].hit,
-            };
-            if runs {
-                let mut io = io_for(
-                    meta,
-                    self.t,
-                    false,
-                    &self.x,
-                    &mut self.signals,
-                    &m.in_ports,
-                    &m.out_ports,
-                );
-                block.output(&mut io);
-            }
-        }
+        self.sweep(false);
         self.first = false;
         if let Some(k) = self.signals.iter().position(|v| !v.is_finite()) {
-            let (meta, port) = self
-                .model
-                .signal_owner(k)
-                .map_or(("?".to_string(), "?"), |(m, p)| (m.name.clone(), p));
+            let (block, port) = self.model.signal_owner(k).map_or(("?".to_string(), "?"), |(m, p)| (m.name.clone(), p));
             return Err(SimError::NonFinite {
                 t: self.t,
-                block: meta,
+                block,
                 what: format!("output `{port}`"),
                 value: self.signals[k],
             });
@@ -251,27 +236,7 @@ impl Simulator {
     /// Steps (3) and (4): discrete updates at hits (and major-step updates
     /// of continuous blocks), then integration to the next major step.
     pub fn advance(&mut self) -> Result<(), SimError> {
-        let m = &mut self.model;
-        for (i, block) in m.blocks.iter_mut().enumerate() {
-            let meta = &m.slots[i];
-            let runs = match meta.rate {
-                Rate::Continuous => true,
-                Rate::Constant => false,
-                Rate::Discrete(c) => self.clocks[c].hit,
-            };
-            if runs {
-                let mut io = io_for(
-                    meta,
-                    self.t,
-                    false,
-                    &self.x,
-                    &mut self.signals,
-                    &m.in_ports,
-                    &m.out_ports,
-                );
-                block.update(&mut io);
-            }
-        }
+        self.sweep(true);
         let target = self.next_major_time();
         let t_new = if self.x.is_empty() {
             // Nothing to integrate; max_step still bounds the adaptive
@@ -286,16 +251,10 @@ impl Simulator {
                 t_end: target,
             };
             let t = self.t;
-            self.integ
-                .advance(&mut sys, t, target, &mut self.x)
-                .map_err(|error| SimError::Solver { t, error })?
+            self.integ.advance(&mut sys, t, target, &mut self.x).map_err(|error| SimError::Solver { t, error })?
         };
         // Land exactly on the target when the solver reached it.
-        self.t = if (target - t_new).abs() <= self.tol {
-            target
-        } else {
-            t_new
-        };
+        self.t = if (target - t_new).abs() <= self.tol { target } else { t_new };
         if self.grid_step > 0.0 {
             while (self.grid_tick as f64) * self.grid_step <= self.t + self.tol {
                 self.grid_tick += 1;
@@ -315,12 +274,7 @@ impl Simulator {
             self.integ.invalidate();
         }
         if let Some(k) = self.x.iter().position(|v| !v.is_finite()) {
-            let owner = self
-                .model
-                .meta
-                .iter()
-                .find(|m| m.states.contains(&k))
-                .map_or("?", |m| m.name.as_str());
+            let owner = self.model.meta.iter().find(|m| m.states.contains(&k)).map_or("?", |m| m.name.as_str());
             return Err(SimError::NonFinite {
                 t: self.t,
                 block: owner.to_string(),
@@ -343,21 +297,13 @@ impl Simulator {
         if self.grid_step > 0.0 {
             next = next.min(self.grid_tick as f64 * self.grid_step);
         }
-        if self.next_event <= next + self.tol {
-            self.next_event
-        } else {
-            next
-        }
+        if self.next_event <= next + self.tol { self.next_event } else { next }
     }
 
     /// The first block event strictly after the current time. Cached in
     /// `next_event` and recomputed only when time reaches it.
     fn earliest_event(&self) -> f64 {
-        self.model
-            .blocks
-            .iter()
-            .map(|b| b.next_event(self.t))
-            .fold(f64::INFINITY, f64::min)
+        self.model.blocks.iter().map(|b| b.next_event(self.t)).fold(f64::INFINITY, f64::min)
     }
 
     /// Runs to the stop time, handing the signals to `sink` at every major

@@ -6,15 +6,7 @@ use crate::diag::{Diagnostic, Pos};
 use crate::yaml::{self, Key, Kind, Yaml};
 use std::sync::Arc;
 
-const TOP_KEYS: [&str; 7] = [
-    "name",
-    "description",
-    "parameters",
-    "simulation",
-    "blocks",
-    "wires",
-    "record",
-];
+const TOP_KEYS: [&str; 7] = ["name", "description", "parameters", "simulation", "blocks", "wires", "record"];
 
 /// One graph file.
 #[derive(Clone, Debug)]
@@ -80,36 +72,25 @@ impl GraphFile {
         let top = match &root.kind {
             Kind::Map(m) => m.as_slice(),
             _ => {
-                return Err(Diagnostic::at(
-                    &root.pos,
-                    "a graph file must be a mapping with `blocks:`, `wires:`, …",
-                ));
+                return Err(Diagnostic::at(&root.pos, "a graph file must be a mapping with `blocks:`, `wires:`, …"));
             }
         };
         for (key, _) in top {
             if !TOP_KEYS.contains(&key.name.as_str()) {
-                return Err(
-                    Diagnostic::at(&key.pos, format!("unknown top-level key `{}`", key.name))
-                        .suggest(&key.name, TOP_KEYS)
-                        .or_hint(format!("top-level keys: {}", TOP_KEYS.join(", "))),
-                );
+                return Err(Diagnostic::at(&key.pos, format!("unknown top-level key `{}`", key.name))
+                    .suggest(&key.name, TOP_KEYS)
+                    .or_hint(format!("top-level keys: {}", TOP_KEYS.join(", "))));
             }
         }
         let text_of = |k: &str| -> Result<Option<String>, Diagnostic> {
-            yaml::lookup(top, k)
-                .map(|v| v.expect_str(&format!("`{k}`")).map(str::to_string))
-                .transpose()
+            yaml::lookup(top, k).map(|v| v.expect_str(&format!("`{k}`")).map(str::to_string)).transpose()
         };
         let parameters = match yaml::lookup(top, "parameters") {
             Some(p) => p.expect_map("`parameters`")?.to_vec(),
             None => Vec::new(),
         };
         let blocks = match yaml::lookup(top, "blocks") {
-            Some(b) => b
-                .expect_map("`blocks`")?
-                .iter()
-                .map(parse_block)
-                .collect::<Result<_, _>>()?,
+            Some(b) => b.expect_map("`blocks`")?.iter().map(parse_block).collect::<Result<_, _>>()?,
             None => Vec::new(),
         };
         let wires = match yaml::lookup(top, "wires") {
@@ -138,10 +119,7 @@ fn seq<'a>(v: &'a Yaml, what: &str) -> Result<&'a [Yaml], Diagnostic> {
     match &v.kind {
         Kind::Seq(items) => Ok(items),
         Kind::Null => Ok(&[]),
-        _ => Err(Diagnostic::at(
-            &v.pos,
-            format!("{what} must be a list, found {}", v.describe()),
-        )),
+        _ => Err(Diagnostic::at(&v.pos, format!("{what} must be a list, found {}", v.describe()))),
     }
 }
 
@@ -152,10 +130,8 @@ fn is_identifier(s: &str) -> bool {
 
 fn parse_block((key, value): &(Key, Yaml)) -> Result<BlockSpec, Diagnostic> {
     if !is_identifier(&key.name) {
-        return Err(
-            Diagnostic::at(&key.pos, format!("`{}` is not a valid block name", key.name))
-                .with_hint("block names are letters, digits and `_`, starting with a letter or `_`"),
-        );
+        return Err(Diagnostic::at(&key.pos, format!("`{}` is not a valid block name", key.name))
+            .with_hint("block names are letters, digits and `_`, starting with a letter or `_`"));
     }
     let entries = match &value.kind {
         Kind::Map(m) => m,
@@ -194,25 +170,15 @@ pub fn parse_endpoint(text: &str, pos: Pos) -> Result<Endpoint, Diagnostic> {
     };
     let ok = block.split('/').all(is_identifier) && port.is_none_or(is_identifier);
     if !ok {
-        return Err(Diagnostic::at(
-            &pos,
-            format!("`{text}` is not a signal: expected `block` or `block.port`"),
-        ));
+        return Err(Diagnostic::at(&pos, format!("`{text}` is not a signal: expected `block` or `block.port`")));
     }
-    Ok(Endpoint {
-        block: block.to_string(),
-        port: port.map(str::to_string),
-        pos,
-    })
+    Ok(Endpoint { block: block.to_string(), port: port.map(str::to_string), pos })
 }
 
 fn parse_wire(v: &Yaml) -> Result<WireSpec, Diagnostic> {
     let text = v.expect_str("a wire")?;
     let Some((src, dsts)) = text.split_once("->") else {
-        return Err(Diagnostic::at(
-            &v.pos,
-            format!("`{text}` is not a wire: expected `source.port -> dest.port`"),
-        ));
+        return Err(Diagnostic::at(&v.pos, format!("`{text}` is not a wire: expected `source.port -> dest.port`")));
     };
     // Positions of the parts within the line, for precise messages.
     let offset_of = |part: &str| {
@@ -221,10 +187,8 @@ fn parse_wire(v: &Yaml) -> Result<WireSpec, Diagnostic> {
         text[..start + leading].chars().count()
     };
     let src_ep = parse_endpoint(src, v.pos.shifted(offset_of(src)))?;
-    let dsts = dsts
-        .split(',')
-        .map(|d| parse_endpoint(d, v.pos.shifted(offset_of(d))))
-        .collect::<Result<Vec<_>, _>>()?;
+    let dsts =
+        dsts.split(',').map(|d| parse_endpoint(d, v.pos.shifted(offset_of(d)))).collect::<Result<Vec<_>, _>>()?;
     Ok(WireSpec { src: src_ep, dsts })
 }
 
@@ -243,10 +207,7 @@ fn parse_record(v: &Yaml) -> Result<Records, Diagnostic> {
                 Some(e) => match e.kind {
                     Kind::Num(n) if n >= 1.0 && n.fract() == 0.0 => Some((n as usize, e.pos.clone())),
                     _ => {
-                        return Err(Diagnostic::at(
-                            &e.pos,
-                            "`every` must be a positive whole number of steps",
-                        ));
+                        return Err(Diagnostic::at(&e.pos, "`every` must be a positive whole number of steps"));
                     }
                 },
                 None => None,
@@ -261,23 +222,16 @@ fn parse_record(v: &Yaml) -> Result<Records, Diagnostic> {
     let mut out = Vec::new();
     for item in list {
         match &item.kind {
-            Kind::Str(s) => out.push(RecordSpec {
-                name: s.trim().to_string(),
-                signal: parse_endpoint(s, item.pos.clone())?,
-            }),
+            Kind::Str(s) => {
+                out.push(RecordSpec { name: s.trim().to_string(), signal: parse_endpoint(s, item.pos.clone())? })
+            }
             Kind::Map(m) if m.len() == 1 => {
                 let (k, sig) = &m[0];
                 let s = sig.expect_str("a recorded signal")?;
-                out.push(RecordSpec {
-                    name: k.name.clone(),
-                    signal: parse_endpoint(s, sig.pos.clone())?,
-                });
+                out.push(RecordSpec { name: k.name.clone(), signal: parse_endpoint(s, sig.pos.clone())? });
             }
             _ => {
-                return Err(Diagnostic::at(
-                    &item.pos,
-                    "a record entry is `block.port` or `name: block.port`",
-                ));
+                return Err(Diagnostic::at(&item.pos, "a record entry is `block.port` or `name: block.port`"));
             }
         }
     }
@@ -307,10 +261,7 @@ mod tests {
         assert_eq!(e.message, "unknown top-level key `blocs`");
         assert_eq!(e.hint.as_deref(), Some("did you mean `blocks`?"));
         let e = GraphFile::parse("blocks:\n  a: {k: 1}\n", "g.yaml".into()).unwrap_err();
-        assert_eq!(
-            (e.pos.unwrap().line, e.message.as_str()),
-            (2, "block `a` has no `type`")
-        );
+        assert_eq!((e.pos.unwrap().line, e.message.as_str()), (2, "block `a` has no `type`"));
         let e = GraphFile::parse("wires:\n  - a => b\n", "g.yaml".into()).unwrap_err();
         assert!(e.message.contains("is not a wire"), "{e}");
     }

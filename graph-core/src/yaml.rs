@@ -68,10 +68,7 @@ impl Yaml {
         match &self.kind {
             Kind::Map(m) => Ok(m),
             Kind::Null => Ok(&[]),
-            _ => Err(Diagnostic::at(
-                &self.pos,
-                format!("{what} must be a mapping, found {}", self.describe()),
-            )),
+            _ => Err(Diagnostic::at(&self.pos, format!("{what} must be a mapping, found {}", self.describe()))),
         }
     }
 
@@ -138,15 +135,7 @@ fn convert(node: Spanned<Node>, file: &Arc<str>) -> Yaml {
         Node::Map(entries) => Kind::Map(
             entries
                 .into_iter()
-                .map(|(k, v)| {
-                    (
-                        Key {
-                            pos: pos_of(&k, file),
-                            name: k.value,
-                        },
-                        convert(v, file),
-                    )
-                })
+                .map(|(k, v)| (Key { pos: pos_of(&k, file), name: k.value }, convert(v, file)))
                 .collect(),
         ),
     };
@@ -244,9 +233,6 @@ mod tests {
         let e = parse("a: [1, 2\nb: 3\n", &file()).unwrap_err();
         assert!(e.pos.is_some() && e.message.starts_with("YAML syntax"), "{e}");
         let e = parse("a: 1\nb: 2\na: 3\n", &file()).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "t.yaml:3:1: duplicate key `a`: names and keys must be unique within a mapping"
-        );
+        assert_eq!(e.to_string(), "t.yaml:3:1: duplicate key `a`: names and keys must be unique within a mapping");
     }
 }

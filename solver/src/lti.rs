@@ -59,17 +59,11 @@ impl StateSpace {
             Ok(cols)
         };
         if rect(&a, "A")? != n {
-            return Err(LtiError::Shape(format!(
-                "A must be square, got {n} rows of {}",
-                rect(&a, "A")?
-            )));
+            return Err(LtiError::Shape(format!("A must be square, got {n} rows of {}", rect(&a, "A")?)));
         }
         let m = rect(&b, "B")?;
         if b.len() != n {
-            return Err(LtiError::Shape(format!(
-                "B must have {n} rows (one per state), got {}",
-                b.len()
-            )));
+            return Err(LtiError::Shape(format!("B must have {n} rows (one per state), got {}", b.len())));
         }
         let p = c.len();
         if rect(&c, "C")? != n && p > 0 {
@@ -80,15 +74,7 @@ impl StateSpace {
             return Err(LtiError::Shape(format!("D must be {p}×{m} (outputs × inputs)")));
         }
         let flat = |m: Vec<Vec<f64>>| m.into_iter().flatten().collect::<Vec<_>>();
-        Ok(StateSpace {
-            n,
-            m,
-            p,
-            a: flat(a),
-            b: flat(b),
-            c: flat(c),
-            d: flat(d),
-        })
+        Ok(StateSpace { n, m, p, a: flat(a), b: flat(b), c: flat(c), d: flat(d) })
     }
 
     /// Whether any output depends directly on the input (D ≠ 0).
@@ -140,10 +126,7 @@ pub fn tf2ss(num: &[f64], den: &[f64]) -> Result<StateSpace, LtiError> {
     let num = poly::trim_leading_zeros(num);
     let (nd, nn) = (den.len() - 1, num.len().saturating_sub(1));
     if num.len() > den.len() {
-        return Err(LtiError::Improper {
-            num_degree: nn,
-            den_degree: nd,
-        });
+        return Err(LtiError::Improper { num_degree: nn, den_degree: nd });
     }
     let lead = den[0];
     let a_coef: Vec<f64> = den[1..].iter().map(|v| v / lead).collect();
@@ -165,24 +148,12 @@ pub fn tf2ss(num: &[f64], den: &[f64]) -> Result<StateSpace, LtiError> {
         b[0] = 1.0;
     }
     let c: Vec<f64> = (0..n).map(|i| b_coef[i + 1] - d0 * a_coef[i]).collect();
-    Ok(StateSpace {
-        n,
-        m: 1,
-        p: 1,
-        a,
-        b,
-        c,
-        d: vec![d0],
-    })
+    Ok(StateSpace { n, m: 1, p: 1, a, b, c, d: vec![d0] })
 }
 
 /// Numerator and denominator of `k · Π(s − zᵢ) / Π(s − pᵢ)`.
 pub fn zpk2tf(zeros: &[Complex<f64>], poles: &[Complex<f64>], gain: f64) -> Result<(Vec<f64>, Vec<f64>), LtiError> {
-    let num: Vec<f64> = poly::from_roots(zeros)
-        .map_err(LtiError::Roots)?
-        .iter()
-        .map(|c| c * gain)
-        .collect();
+    let num: Vec<f64> = poly::from_roots(zeros).map_err(LtiError::Roots)?.iter().map(|c| c * gain).collect();
     let den = poly::from_roots(poles).map_err(LtiError::Roots)?;
     Ok((num, den))
 }
@@ -230,13 +201,7 @@ mod tests {
 
     #[test]
     fn improper_and_zero_denominators_are_rejected() {
-        assert_eq!(
-            tf2ss(&[1.0, 0.0, 0.0], &[1.0, 1.0]),
-            Err(LtiError::Improper {
-                num_degree: 2,
-                den_degree: 1
-            })
-        );
+        assert_eq!(tf2ss(&[1.0, 0.0, 0.0], &[1.0, 1.0]), Err(LtiError::Improper { num_degree: 2, den_degree: 1 }));
         assert_eq!(tf2ss(&[1.0], &[0.0, 0.0]), Err(LtiError::ZeroDenominator));
     }
 

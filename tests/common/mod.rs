@@ -20,10 +20,5 @@ pub fn error(yaml: &str) -> ctlgraph::core::Diagnostic {
 /// Largest |a - b| over a column against a closed form f(t).
 pub fn max_error(trace: &Trace, column: &str, f: impl Fn(f64) -> f64) -> f64 {
     let ys = trace.column(column).unwrap_or_else(|| panic!("no column {column}"));
-    trace
-        .t()
-        .iter()
-        .zip(ys)
-        .map(|(&t, &y)| (y - f(t)).abs())
-        .fold(0.0, f64::max)
+    trace.t().iter().zip(ys).map(|(&t, &y)| (y - f(t)).abs()).fold(0.0, f64::max)
 }

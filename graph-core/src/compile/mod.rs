@@ -107,11 +107,7 @@ struct Driver {
 /// Compiles a flat graph with the block types of `reg`.
 pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let mut nodes = instantiate(g, reg)?;
-    let index: HashMap<&str, usize> = nodes
-        .iter()
-        .enumerate()
-        .map(|(i, n)| (n.flat.path.as_str(), i))
-        .collect();
+    let index: HashMap<&str, usize> = nodes.iter().enumerate().map(|(i, n)| (n.flat.path.as_str(), i)).collect();
     let direct = connect(g, &nodes, &index)?;
     let drivers = resolve_drivers(&nodes, &direct)?;
     resolve_widths(&mut nodes, &drivers)?;
@@ -124,13 +120,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     for &i in &order {
         for (p, port) in nodes[i].iface.outputs.iter().enumerate() {
             let width = resolved(port.width, nodes[i].width);
-            out_offset.insert(
-                (i, p),
-                Port {
-                    offset: signal_len,
-                    width,
-                },
-            );
+            out_offset.insert((i, p), Port { offset: signal_len, width });
             signal_len += width;
         }
     }
@@ -141,10 +131,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let position: HashMap<usize, usize> = order.iter().enumerate().map(|(k, &i)| (i, k)).collect();
     for &i in &order {
         let node = &mut nodes[i];
-        let block = node
-            .block
-            .take()
-            .ok_or_else(|| Diagnostic::plain("internal: block built twice"))?;
+        let block = node.block.take().ok_or_else(|| Diagnostic::plain("internal: block built twice"))?;
         let in_start = in_ports.len();
         for d in &drivers[i] {
             in_ports.push(out_offset[&(d.src, d.port)]);
@@ -163,10 +150,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
             sample_time: match rate {
                 Rate::Constant => SampleTime::Constant,
                 Rate::Continuous => SampleTime::Continuous,
-                Rate::Discrete(c) => SampleTime::Discrete {
-                    period: clocks[c].0,
-                    offset: clocks[c].1,
-                },
+                Rate::Discrete(c) => SampleTime::Discrete { period: clocks[c].0, offset: clocks[c].1 },
             },
             inputs: in_start..in_ports.len(),
             outputs: out_start..out_ports.len(),
@@ -192,12 +176,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let columns = record_columns(g, &nodes, &index, &direct, &out_offset)?;
     let slots = meta
         .iter()
-        .map(|m| Slot {
-            rate: m.rate,
-            states: m.states.clone(),
-            inputs: m.inputs.clone(),
-            outputs: m.outputs.clone(),
-        })
+        .map(|m| Slot { rate: m.rate, states: m.states.clone(), inputs: m.inputs.clone(), outputs: m.outputs.clone() })
         .collect();
     Ok(Model {
         blocks: model_blocks,

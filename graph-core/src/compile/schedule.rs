@@ -21,14 +21,10 @@ pub(super) fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>
             }
         }
     }
-    let mut indegree: Vec<usize> = ids
-        .iter()
-        .map(|&n| graph.neighbors_directed(n, petgraph::Direction::Incoming).count())
-        .collect();
-    let mut ready: BinaryHeap<Reverse<usize>> = (0..nodes.len())
-        .filter(|&i| indegree[i] == 0 && !nodes[i].is_virtual)
-        .map(Reverse)
-        .collect();
+    let mut indegree: Vec<usize> =
+        ids.iter().map(|&n| graph.neighbors_directed(n, petgraph::Direction::Incoming).count()).collect();
+    let mut ready: BinaryHeap<Reverse<usize>> =
+        (0..nodes.len()).filter(|&i| indegree[i] == 0 && !nodes[i].is_virtual).map(Reverse).collect();
     let mut order = Vec::with_capacity(nodes.len());
     while let Some(Reverse(i)) = ready.pop() {
         order.push(i);
@@ -51,24 +47,13 @@ pub(super) fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>
         let self_loop = scc.len() == 1 && graph.contains_edge(scc[0], scc[0]);
         if scc.len() > 1 || self_loop {
             let cycle = cycle_through(&graph, ids[first], &scc);
-            loops.push(
-                cycle
-                    .iter()
-                    .map(|&n| nodes[graph[n]].flat.path.as_str())
-                    .collect::<Vec<_>>(),
-            );
+            loops.push(cycle.iter().map(|&n| nodes[graph[n]].flat.path.as_str()).collect::<Vec<_>>());
         }
     }
     loops.sort();
     let first_block = loops.first().and_then(|l| l.first()).copied().unwrap_or("");
-    let pos = nodes
-        .iter()
-        .find(|n| n.flat.path == first_block)
-        .map(|n| n.flat.spec.pos.clone());
-    let text: Vec<String> = loops
-        .iter()
-        .map(|l| format!("{} -> {}", l.join(" -> "), l[0]))
-        .collect();
+    let pos = nodes.iter().find(|n| n.flat.path == first_block).map(|n| n.flat.spec.pos.clone());
+    let text: Vec<String> = loops.iter().map(|l| format!("{} -> {}", l.join(" -> "), l[0])).collect();
     let message = format!("algebraic loop: {}", text.join("; "));
     let hint = "every block on the loop has direct feedthrough; break it with a block that has none \
                 (unit_delay, integrator, a strictly proper transfer_function, an observer)";

@@ -23,15 +23,7 @@ pub(super) fn instantiate<'g>(g: &'g FlatGraph, reg: &Registry) -> Result<Vec<No
             .suggest(&spec.type_name, reg.names())
             .or_hint("`ctlgraph blocks` lists the block types"));
         };
-        let mut params = Params::new(
-            &fb.path,
-            ty.name,
-            &spec.pos,
-            &spec.params,
-            &fb.scope,
-            &fb.dir,
-            ty.params,
-        );
+        let mut params = Params::new(&fb.path, ty.name, &spec.pos, &spec.params, &fb.scope, &fb.dir, ty.params);
         if ty.name == INPORT || ty.name == OUTPORT {
             params.finish()?;
             if ty.name == INPORT && !fb.path.contains('/') {
@@ -41,27 +33,14 @@ pub(super) fn instantiate<'g>(g: &'g FlatGraph, reg: &Registry) -> Result<Vec<No
                 )
                 .with_hint("a top-level graph gets its inputs from source blocks (constant, step, from_csv, …)"));
             }
-            let iface = Interface::new(SampleTime::Inherited)
-                .input("in", Width::Common, true)
-                .output("out", Width::Common);
-            nodes.push(Node {
-                flat: fb,
-                iface,
-                block: None,
-                is_virtual: true,
-                width: None,
-            });
+            let iface =
+                Interface::new(SampleTime::Inherited).input("in", Width::Common, true).output("out", Width::Common);
+            nodes.push(Node { flat: fb, iface, block: None, is_virtual: true, width: None });
             continue;
         }
         let built = (ty.build)(&mut params)?;
         params.finish()?;
-        nodes.push(Node {
-            flat: fb,
-            iface: built.iface,
-            block: Some(built.block),
-            is_virtual: false,
-            width: None,
-        });
+        nodes.push(Node { flat: fb, iface: built.iface, block: Some(built.block), is_virtual: false, width: None });
     }
     Ok(nodes)
 }
@@ -77,22 +56,18 @@ pub(super) fn port_index(node: &Node, ep: &Endpoint, input: bool) -> Result<usiz
     match &ep.port {
         _ if node.is_virtual => Ok(0),
         Some(p) => names.iter().position(|n| n == p).ok_or_else(|| {
-            let listing = if names.is_empty() {
-                format!("it has no {side}s")
-            } else {
-                format!("{side}s: {}", names.join(", "))
-            };
+            let listing =
+                if names.is_empty() { format!("it has no {side}s") } else { format!("{side}s: {}", names.join(", ")) };
             Diagnostic::at(&ep.pos, format!("{what} has no {side} `{p}`"))
                 .suggest(p, names.iter().copied())
                 .or_hint(&listing)
         }),
         None if names.len() == 1 => Ok(0),
         None if names.is_empty() => Err(Diagnostic::at(&ep.pos, format!("{what} has no {side}s"))),
-        None => Err(Diagnostic::at(
-            &ep.pos,
-            format!("{what} has {} {side}s: name one as `{}.PORT`", names.len(), ep.block),
-        )
-        .with_hint(format!("{side}s: {}", names.join(", ")))),
+        None => {
+            Err(Diagnostic::at(&ep.pos, format!("{what} has {} {side}s: name one as `{}.PORT`", names.len(), ep.block))
+                .with_hint(format!("{side}s: {}", names.join(", "))))
+        }
     }
 }
 
@@ -114,20 +89,10 @@ pub(super) fn connect(
         let dp = port_index(&nodes[d], &w.dst, true)?;
         if let Some(prev) = &direct[d][dp] {
             let port = &nodes[d].iface.inputs[dp].name;
-            return Err(Diagnostic::at(
-                &w.dst.pos,
-                format!("input `{}.{port}` is wired twice", nodes[d].flat.path),
-            )
-            .with_hint(format!(
-                "it is already fed at line {}; use a `sum` block to add signals",
-                prev.pos.line
-            )));
+            return Err(Diagnostic::at(&w.dst.pos, format!("input `{}.{port}` is wired twice", nodes[d].flat.path))
+                .with_hint(format!("it is already fed at line {}; use a `sum` block to add signals", prev.pos.line)));
         }
-        direct[d][dp] = Some(Driver {
-            src: s,
-            port: sp,
-            pos: w.dst.pos.clone(),
-        });
+        direct[d][dp] = Some(Driver { src: s, port: sp, pos: w.dst.pos.clone() });
     }
     Ok(direct)
 }
@@ -140,10 +105,7 @@ pub(super) fn resolve_drivers(nodes: &[Node], direct: &[Vec<Option<Driver>>]) ->
         let message = if node.is_virtual {
             format!("subsystem port `{}` is not wired", node.flat.path)
         } else {
-            format!(
-                "input `{}` of block `{}` is not wired",
-                node.iface.inputs[p].name, node.flat.path
-            )
+            format!("input `{}` of block `{}` is not wired", node.iface.inputs[p].name, node.flat.path)
         };
         Diagnostic::at(&node.flat.spec.pos, message).with_hint("every input needs exactly one wire")
     };
@@ -164,10 +126,7 @@ pub(super) fn resolve_drivers(nodes: &[Node], direct: &[Vec<Option<Driver>>]) ->
                 d.pos = pos;
                 hops += 1;
                 if hops > nodes.len() {
-                    return Err(Diagnostic::at(
-                        &node.flat.spec.pos,
-                        "subsystem ports are wired in a circle",
-                    ));
+                    return Err(Diagnostic::at(&node.flat.spec.pos, "subsystem ports are wired in a circle"));
                 }
             }
             ports.push(d);
@@ -256,11 +215,7 @@ pub(super) fn record_columns(
                 None => Diagnostic::plain(message),
             });
         }
-        columns.push(Column {
-            name,
-            offset: port.offset,
-            width: port.width,
-        });
+        columns.push(Column { name, offset: port.offset, width: port.width });
         Ok(())
     };
     if g.records.is_empty() {
@@ -283,25 +238,16 @@ pub(super) fn record_columns(
         let mut target = ep.clone();
         if let Some((_, outs)) = g.subsystems.get(&ep.block) {
             let port = resolve_sub_port(ep, outs, "outport")?;
-            target = Endpoint {
-                block: format!("{}/{port}", ep.block),
-                port: None,
-                pos: ep.pos.clone(),
-            };
+            target = Endpoint { block: format!("{}/{port}", ep.block), port: None, pos: ep.pos.clone() };
         }
         let Some(&i) = index.get(target.block.as_str()) else {
-            return Err(
-                Diagnostic::at(&ep.pos, format!("record: no block named `{}`", ep.block))
-                    .suggest(&ep.block, index.keys().copied()),
-            );
+            return Err(Diagnostic::at(&ep.pos, format!("record: no block named `{}`", ep.block))
+                .suggest(&ep.block, index.keys().copied()));
         };
         let (mut src, mut port) = (i, port_index(&nodes[i], &target, false)?);
         while nodes[src].is_virtual {
             let Some(d) = &direct[src][0] else {
-                return Err(Diagnostic::at(
-                    &ep.pos,
-                    format!("record: `{}` is not wired", nodes[src].flat.path),
-                ));
+                return Err(Diagnostic::at(&ep.pos, format!("record: `{}` is not wired", nodes[src].flat.path)));
             };
             (src, port) = (d.src, d.port);
         }

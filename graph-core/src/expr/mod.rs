@@ -120,18 +120,10 @@ impl Expr {
     /// Parses `src`, resolving names through `scope`.
     pub fn parse(src: &str, scope: &dyn Scope) -> Result<Expr, ExprError> {
         let tokens = lex(src)?;
-        let mut p = Parser {
-            tokens,
-            at: 0,
-            scope,
-            len: src.chars().count(),
-        };
+        let mut p = Parser { tokens, at: 0, scope, len: src.chars().count() };
         let root = p.expr()?;
         if let Some(tok) = p.peek() {
-            return Err(p.error_at(
-                tok.offset,
-                format!("unexpected {} after the end of the expression", tok.kind),
-            ));
+            return Err(p.error_at(tok.offset, format!("unexpected {} after the end of the expression", tok.kind)));
         }
         Ok(Expr { root: fold(root) })
     }
@@ -214,11 +206,7 @@ fn eval(node: &Node, vars: &[f64]) -> f64 {
         Node::MinMax { max, args } => {
             let mut it = args.iter().map(|a| eval(a, vars));
             let first = it.next().unwrap_or(f64::NAN);
-            if *max {
-                it.fold(first, f64::max)
-            } else {
-                it.fold(first, f64::min)
-            }
+            if *max { it.fold(first, f64::max) } else { it.fold(first, f64::min) }
         }
     }
 }
@@ -230,10 +218,7 @@ fn fold(node: Node) -> Node {
         Node::Bin(op, a, b) => Node::Bin(op, Box::new(fold(*a)), Box::new(fold(*b))),
         Node::Call(f, a) => Node::Call(f, Box::new(fold(*a))),
         Node::Atan2(a, b) => Node::Atan2(Box::new(fold(*a)), Box::new(fold(*b))),
-        Node::MinMax { max, args } => Node::MinMax {
-            max,
-            args: args.into_iter().map(fold).collect(),
-        },
+        Node::MinMax { max, args } => Node::MinMax { max, args: args.into_iter().map(fold).collect() },
         leaf => leaf,
     };
     let is_const = match &folded {
@@ -245,11 +230,7 @@ fn fold(node: Node) -> Node {
         }
         Node::MinMax { args, .. } => args.iter().all(|a| matches!(a, Node::Const(_))),
     };
-    if is_const {
-        Node::Const(eval(&folded, &[]))
-    } else {
-        folded
-    }
+    if is_const { Node::Const(eval(&folded, &[])) } else { folded }
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -306,31 +287,18 @@ fn lex(src: &str) -> Result<Vec<Tok>, ExprError> {
                 message: format!("`{text}` is not a number"),
                 hint: None,
             })?;
-            out.push(Tok {
-                kind: TokKind::Num(v),
-                offset: start,
-            });
+            out.push(Tok { kind: TokKind::Num(v), offset: start });
         } else if c.is_alphabetic() || c == '_' {
             let start = i;
             while i < chars.len() && (chars[i].is_alphanumeric() || chars[i] == '_') {
                 i += 1;
             }
-            out.push(Tok {
-                kind: TokKind::Name(chars[start..i].iter().collect()),
-                offset: start,
-            });
+            out.push(Tok { kind: TokKind::Name(chars[start..i].iter().collect()), offset: start });
         } else if "+-*/^(),".contains(c) {
-            out.push(Tok {
-                kind: TokKind::Sym(c),
-                offset: i,
-            });
+            out.push(Tok { kind: TokKind::Sym(c), offset: i });
             i += 1;
         } else {
-            return Err(ExprError {
-                offset: i,
-                message: format!("unexpected character `{c}`"),
-                hint: None,
-            });
+            return Err(ExprError { offset: i, message: format!("unexpected character `{c}`"), hint: None });
         }
     }
     Ok(out)
@@ -358,11 +326,7 @@ impl Parser<'_> {
     }
 
     fn error_at(&self, offset: usize, message: String) -> ExprError {
-        ExprError {
-            offset,
-            message,
-            hint: None,
-        }
+        ExprError { offset, message, hint: None }
     }
 
     fn end_offset(&self) -> usize {
@@ -437,11 +401,7 @@ impl Parser<'_> {
             }
             TokKind::Name(name) => {
                 self.at += 1;
-                if self.eat('(') {
-                    self.call(&name, offset)
-                } else {
-                    self.name(&name, offset)
-                }
+                if self.eat('(') { self.call(&name, offset) } else { self.name(&name, offset) }
             }
             other => Err(self.error_at(offset, format!("expected a number, a name or `(`, found {other}"))),
         }
@@ -458,11 +418,7 @@ impl Parser<'_> {
                 let hint = crate::diag::closest(name, names.iter().map(String::as_str).chain(["pi", "inf"]))
                     .map(|c| format!("did you mean `{c}`?"))
                     .or_else(|| (!names.is_empty()).then(|| format!("known names here: {}", names.join(", "))));
-                Err(ExprError {
-                    offset,
-                    message: format!("unknown name `{name}`"),
-                    hint,
-                })
+                Err(ExprError { offset, message: format!("unknown name `{name}`"), hint })
             }
         }
     }
@@ -474,11 +430,8 @@ impl Parser<'_> {
         }
         self.expect(')')?;
         let n = args.len();
-        let arity_error = |want: &str| ExprError {
-            offset,
-            message: format!("`{name}` takes {want}, got {n}"),
-            hint: None,
-        };
+        let arity_error =
+            |want: &str| ExprError { offset, message: format!("`{name}` takes {want}, got {n}"), hint: None };
         if let Some(&(_, f)) = FUNC1.iter().find(|(n, _)| *n == name) {
             if args.len() != 1 {
                 return Err(arity_error("one argument"));
@@ -500,18 +453,11 @@ impl Parser<'_> {
             });
         }
         if VARIADIC.contains(&name) {
-            return Ok(Node::MinMax {
-                max: name == "max",
-                args,
-            });
+            return Ok(Node::MinMax { max: name == "max", args });
         }
         let all = FUNC1.iter().map(|(n, _)| *n).chain(FUNC2).chain(VARIADIC);
         let hint = crate::diag::closest(name, all).map(|c| format!("did you mean `{c}`?"));
-        Err(ExprError {
-            offset,
-            message: format!("unknown function `{name}`"),
-            hint,
-        })
+        Err(ExprError { offset, message: format!("unknown function `{name}`"), hint })
     }
 }
 
@@ -520,11 +466,7 @@ pub struct Constants<'a>(pub &'a [(String, f64)]);
 
 impl Scope for Constants<'_> {
     fn lookup(&self, name: &str) -> Option<Binding> {
-        self.0
-            .iter()
-            .rev()
-            .find(|(n, _)| n == name)
-            .map(|&(_, v)| Binding::Value(v))
+        self.0.iter().rev().find(|(n, _)| n == name).map(|&(_, v)| Binding::Value(v))
     }
     fn names(&self) -> Vec<String> {
         self.0.iter().map(|(n, _)| n.clone()).collect()

@@ -21,10 +21,7 @@ fn names_functions_and_constants() {
     assert_eq!(val("5*h"), 5e-4);
     assert_eq!(val("3*w0"), 3000.0);
     assert_eq!(val("w0^2"), 1e6);
-    assert_eq!(
-        val("sqrt(16) + abs(-2) + max(1, 7, 3) + min(4, 2)"),
-        4.0 + 2.0 + 7.0 + 2.0
-    );
+    assert_eq!(val("sqrt(16) + abs(-2) + max(1, 7, 3) + min(4, 2)"), 4.0 + 2.0 + 7.0 + 2.0);
     assert!((val("atan2(1, 1)") - std::f64::consts::FRAC_PI_4).abs() < 1e-15);
     assert!((val("sin(pi/2) + cos(0) + tan(0) + exp(0) + ln(1)") - 3.0).abs() < 1e-15);
     assert_eq!(val("1.5e3 + .5 + 2E-1"), 1500.7);

@@ -197,12 +197,9 @@ impl Integrator {
             Method::Euler { .. } => self.euler(sys, t, h, x),
             Method::Heun { .. } => self.heun(sys, t, h, x),
             Method::Rk4 { .. } => self.rk4(sys, t, h, x),
-            Method::DormandPrince {
-                rtol,
-                atol,
-                max_step,
-                initial_step,
-            } => return self.dopri5(sys, t, t_limit, x, rtol, atol, max_step, initial_step),
+            Method::DormandPrince { rtol, atol, max_step, initial_step } => {
+                return self.dopri5(sys, t, t_limit, x, rtol, atol, max_step, initial_step);
+            }
         }
         self.stats.steps += 1;
         Ok(t_limit)
@@ -317,11 +314,7 @@ impl Integrator {
                 return Err(SolverError::NonFinite { t });
             }
             if err <= 1.0 {
-                let factor = if err == 0.0 {
-                    5.0
-                } else {
-                    (0.9 * err.powf(-0.2)).clamp(0.2, 5.0)
-                };
+                let factor = if err == 0.0 { 5.0 } else { (0.9 * err.powf(-0.2)).clamp(0.2, 5.0) };
                 // A step cut short to land on the limit says nothing about
                 // the step the dynamics allow: keep the larger proposal.
                 let proposal = (h * factor).min(max_step);
@@ -357,11 +350,7 @@ impl Integrator {
             d2 += ((self.k[1][i] - self.k[0][i]) / sc).powi(2);
         }
         let d2 = (d2 / n).sqrt() / h0;
-        let h1 = if d1.max(d2) <= 1e-15 {
-            (h0 * 1e-3).max(1e-6)
-        } else {
-            (0.01 / d1.max(d2)).powf(0.2)
-        };
+        let h1 = if d1.max(d2) <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / d1.max(d2)).powf(0.2) };
         (100.0 * h0).min(h1).min(max_step)
     }
 }

@@ -43,24 +43,14 @@ fn fixed_step_methods_converge_at_their_order() {
 #[test]
 fn dormand_prince_is_fifth_order_at_fixed_step() {
     // Huge tolerances and a pinned step make every step accepted at size h.
-    let pinned = |step: f64| Method::DormandPrince {
-        rtol: 1e9,
-        atol: 1e9,
-        max_step: step,
-        initial_step: Some(step),
-    };
+    let pinned = |step: f64| Method::DormandPrince { rtol: 1e9, atol: 1e9, max_step: step, initial_step: Some(step) };
     let order = observed_order(pinned, 10);
     assert!((order - 5.0).abs() < 0.25, "dopri5 order {order}");
 }
 
 #[test]
 fn dormand_prince_meets_tolerance_and_lands_exactly() {
-    let method = Method::DormandPrince {
-        rtol: 1e-8,
-        atol: 1e-10,
-        max_step: 1.0,
-        initial_step: None,
-    };
+    let method = Method::DormandPrince { rtol: 1e-8, atol: 1e-10, max_step: 1.0, initial_step: None };
     let mut integ = Integrator::new(method, 2);
     let mut x = [1.0, 0.0];
     let mut t = 0.0;
@@ -88,12 +78,7 @@ fn dormand_prince_rejects_steps_across_a_kink() {
             dx[0] = if t < 1.0 { 1.0 } else { -50.0 * x[0] };
         }
     }
-    let method = Method::DormandPrince {
-        rtol: 1e-6,
-        atol: 1e-9,
-        max_step: 0.5,
-        initial_step: None,
-    };
+    let method = Method::DormandPrince { rtol: 1e-6, atol: 1e-9, max_step: 0.5, initial_step: None };
     let mut integ = Integrator::new(method, 1);
     let (mut t, mut x) = (0.0, [0.0]);
     while t < 2.0 {
@@ -120,12 +105,7 @@ fn blow_up_is_reported_not_looped_on() {
             dx[0] = x[0] * x[0];
         }
     }
-    let method = Method::DormandPrince {
-        rtol: 1e-6,
-        atol: 1e-9,
-        max_step: 1.0,
-        initial_step: None,
-    };
+    let method = Method::DormandPrince { rtol: 1e-6, atol: 1e-9, max_step: 1.0, initial_step: None };
     let mut integ = Integrator::new(method, 1);
     let (mut t, mut x) = (0.0, [1.0]);
     let mut result = Ok(0.0);
