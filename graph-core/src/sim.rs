@@ -143,7 +143,7 @@ impl Simulator {
         }
         self.mark_hits();
         self.next_event = self.earliest_event();
-        self.integ = Integrator::new(self.model.sim.method, self.model.n_states);
+        self.integ.reset();
     }
 
     pub fn model(&self) -> &Model {

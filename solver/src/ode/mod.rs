@@ -169,6 +169,14 @@ impl Integrator {
         self.stats
     }
 
+    /// Forgets step-size history and statistics, for a new run from the
+    /// start (keeps the buffers).
+    pub fn reset(&mut self) {
+        self.h_next = 0.0;
+        self.fsal_valid = false;
+        self.stats = Stats::default();
+    }
+
     /// Tells the adaptive method that `f` changed discontinuously at the
     /// current time (a sample hit or an event), so the derivative cached from
     /// the previous step must not be reused.
