@@ -10,8 +10,10 @@
 
 pub mod dot;
 pub mod plot;
+pub mod prop;
 pub mod record;
 pub mod report;
+pub mod suite;
 
 pub use ctlgraph_blocks as blocks;
 pub use ctlgraph_core as core;

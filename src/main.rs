@@ -2,8 +2,10 @@
 //! 2 the input is invalid (file, YAML, schema, graph, arguments).
 
 use clap::{Parser, Subcommand};
+use ctlgraph::prop::{PropConfig, PropOutcome, Vary};
 use ctlgraph::record::{CsvFile, Recorder, Trace, write_atomic};
 use ctlgraph::report::{RunInfo, to_json};
+use ctlgraph::suite::Failure;
 use ctlgraph_core::flatten::parse_set;
 use ctlgraph_core::{Diagnostic, Model, Simulator};
 use std::io::IsTerminal;
@@ -38,6 +40,30 @@ enum Command {
         /// Write a machine-readable run report (JSON).
         #[arg(long)]
         report: Option<PathBuf>,
+        /// Override `simulation.seed` (noise realisations).
+        #[arg(long)]
+        seed: Option<u64>,
+    },
+    /// Run every graph with `checks:` under the given files or folders.
+    Test {
+        /// Graph files or folders (default: graphs/).
+        paths: Vec<PathBuf>,
+    },
+    /// Property-test a graph: vary parameters, run its checks, shrink failures.
+    Prop {
+        graph: PathBuf,
+        /// A parameter and its range (repeatable): --vary w0=500..2000.
+        #[arg(long, value_name = "NAME=LO..HI", required = true)]
+        vary: Vec<String>,
+        /// Also draw the simulation seed.
+        #[arg(long)]
+        vary_seed: bool,
+        /// Number of parameter sets to draw.
+        #[arg(long, default_value_t = 64)]
+        cases: u32,
+        /// Seed of the drawing (same seed, same cases).
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
     },
     /// Validate a graph and print its execution order with sample times.
     Check {
@@ -55,24 +81,16 @@ enum Command {
     Blocks { r#type: Option<String> },
 }
 
-/// A failure and its exit code.
-enum Failure {
-    Invalid(Diagnostic),
-    Run(String),
-}
-
-impl From<Diagnostic> for Failure {
-    fn from(d: Diagnostic) -> Self {
-        Failure::Invalid(d)
-    }
-}
-
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run { graph, out, plot, sets, stop_time, report } => {
-            run(&graph, out.as_deref(), plot.as_deref(), &sets, stop_time, report.as_deref())
-        }
+        Command::Run { graph, out, plot, sets, stop_time, report, seed } => run(
+            &graph,
+            RunOptions { out: out.as_deref(), plot: plot.as_deref(), stop_time, report: report.as_deref(), seed },
+            &sets,
+        ),
+        Command::Test { paths } => test(paths),
+        Command::Prop { graph, vary, vary_seed, cases, seed } => prop(&graph, &vary, vary_seed, cases, seed),
         Command::Check { graph, sets } => check(&graph, &sets),
         Command::Dot { graph, sets } => compile(&graph, &sets).map(|m| print!("{}", ctlgraph::dot::to_dot(&m))),
         Command::Blocks { r#type } => blocks(r#type.as_deref()),
@@ -83,6 +101,7 @@ fn main() -> ExitCode {
             eprintln!("error: {d}");
             ExitCode::from(2)
         }
+        Err(Failure::Run(message)) if message.is_empty() => ExitCode::from(1),
         Err(Failure::Run(message)) => {
             eprintln!("error: {message}");
             ExitCode::from(1)
@@ -194,29 +213,37 @@ impl Progress {
     }
 }
 
-fn run(
-    graph: &Path,
-    out: Option<&Path>,
-    plot: Option<&Path>,
-    sets: &[String],
+/// What `run` writes besides the summary line.
+struct RunOptions<'a> {
+    out: Option<&'a Path>,
+    plot: Option<&'a Path>,
     stop_time: Option<f64>,
-    report: Option<&Path>,
-) -> Result<(), Failure> {
-    if let Some(t) = stop_time.filter(|t| !(*t > 0.0 && t.is_finite())) {
+    report: Option<&'a Path>,
+    seed: Option<u64>,
+}
+
+fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> Failure + '_ {
+    move |e| Failure::Run(format!("cannot write {}: {e}", path.display()))
+}
+
+fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
+    if let Some(t) = opts.stop_time.filter(|t| !(*t > 0.0 && t.is_finite())) {
         return Err(Diagnostic::plain(format!("--stop-time {t}: must be a positive number")).into());
     }
-    let model = compile(graph, sets)?;
+    let mut model = compile(graph, sets)?;
+    if let Some(s) = opts.seed {
+        model.sim.seed = s;
+    }
     let seed = model.sim.seed;
-    let mut sim = Simulator::new(model, stop_time);
+    let checks = model.checks.clone();
+    let mut sim = Simulator::new(model, opts.stop_time);
     let headers = sim.model().headers();
-    let mut csv = match out {
-        Some(path) => Some(
-            CsvFile::create(path, &headers)
-                .map_err(|e| Failure::Run(format!("cannot write {}: {e}", path.display())))?,
-        ),
+    let mut csv = match opts.out {
+        Some(path) => Some(CsvFile::create(path, &headers).map_err(io_error(path))?),
         None => None,
     };
-    let mut trace = plot.map(|_| Trace::new(headers.clone()));
+    let keep_trace = opts.plot.is_some() || !checks.is_empty();
+    let mut trace = keep_trace.then(|| Trace::new(headers.clone()));
     let mut recorder = Recorder::new(sim.model());
     let mut progress = Progress::new(sim.stop_time());
     let mut steps = 0u64;
@@ -239,7 +266,11 @@ fn run(
     recorder.flush(&mut emit);
     progress.finish();
     let wall = start.elapsed().as_secs_f64();
-    if let Some(path) = report {
+    let results: Vec<_> = match (&result, &trace) {
+        (Ok(_), Some(tr)) => checks.iter().map(|c| c.evaluate(tr)).collect(),
+        _ => Vec::new(),
+    };
+    if let Some(path) = opts.report {
         let bytes = std::fs::read(graph).unwrap_or_default();
         let info = RunInfo {
             graph: &graph.display().to_string(),
@@ -251,20 +282,19 @@ fn run(
             simulated: sim.time(),
             wall_seconds: wall,
             error: result.as_ref().err().map(ToString::to_string),
+            checks: &results,
         };
         let text = serde_json::to_string_pretty(&to_json(&info)).unwrap_or_default();
-        write_atomic(path, text.as_bytes())
-            .map_err(|e| Failure::Run(format!("cannot write {}: {e}", path.display())))?;
+        write_atomic(path, text.as_bytes()).map_err(io_error(path))?;
     }
     result.map_err(|e| Failure::Run(e.to_string()))?;
-    if let (Some(c), Some(path)) = (csv, out) {
-        c.commit().map_err(|e| Failure::Run(format!("cannot write {}: {e}", path.display())))?;
+    if let (Some(c), Some(path)) = (csv, opts.out) {
+        c.commit().map_err(io_error(path))?;
     }
-    if let (Some(tr), Some(path)) = (trace, plot) {
+    if let (Some(tr), Some(path)) = (&trace, opts.plot) {
         let title = sim.model().name.clone().unwrap_or_else(|| graph.display().to_string());
-        let svg = ctlgraph::plot::render_svg(&tr, &title).map_err(Failure::Run)?;
-        write_atomic(path, svg.as_bytes())
-            .map_err(|e| Failure::Run(format!("cannot write {}: {e}", path.display())))?;
+        let svg = ctlgraph::plot::render_svg(tr, &title).map_err(Failure::Run)?;
+        write_atomic(path, svg.as_bytes()).map_err(io_error(path))?;
     }
     let simulated = sim.time();
     let wall_text = if wall < 1.0 { format!("{:.2} ms", wall * 1e3) } else { format!("{wall:.3} s") };
@@ -274,5 +304,85 @@ fn run(
         sim.stats().major_steps,
         simulated / wall.max(1e-9)
     );
+    for r in &results {
+        println!("  {r}");
+    }
+    let failed = results.iter().filter(|r| !r.passed).count();
+    if failed > 0 {
+        return Err(Failure::Run(format!("{failed} of {} checks failed", results.len())));
+    }
     Ok(())
+}
+
+fn test(paths: Vec<PathBuf>) -> Result<(), Failure> {
+    let paths = if paths.is_empty() { vec![PathBuf::from("graphs")] } else { paths };
+    let graphs = ctlgraph::suite::discover(&paths)?;
+    let start = Instant::now();
+    let outcomes = ctlgraph::suite::run_all(&graphs);
+    let (mut passed, mut failed, mut broken, mut invalid) = (0, 0, 0, false);
+    for o in &outcomes {
+        println!("{}", o.path.display());
+        match &o.result {
+            Ok(results) => {
+                for r in results {
+                    println!("  {r}");
+                    if r.passed { passed += 1 } else { failed += 1 }
+                }
+            }
+            Err(e) => {
+                println!("  ERROR  {}", e.to_string().replace('\n', "\n         "));
+                broken += 1;
+                invalid |= matches!(e, Failure::Invalid(_));
+            }
+        }
+    }
+    println!(
+        "{} graph(s), {} check(s): {passed} passed, {failed} failed{} ({:.2} s)",
+        outcomes.len(),
+        passed + failed,
+        if broken > 0 { format!(", {broken} graph(s) did not run") } else { String::new() },
+        start.elapsed().as_secs_f64()
+    );
+    if outcomes.is_empty() {
+        println!(
+            "no graphs with `checks:` under {}",
+            paths.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
+        );
+    }
+    match (invalid, failed + broken) {
+        (true, _) => Err(Failure::Invalid(Diagnostic::plain("some graphs are invalid (see above)"))),
+        (false, 0) => Ok(()),
+        (false, _) => Err(Failure::Run(String::new())),
+    }
+}
+
+fn prop(graph: &Path, vary: &[String], vary_seed: bool, cases: u32, seed: u64) -> Result<(), Failure> {
+    let vary = vary.iter().map(|v| Vary::parse(v)).collect::<Result<Vec<_>, _>>()?;
+    let ranges: Vec<String> = vary.iter().map(|v| format!("{} in [{}, {}]", v.name, v.lo, v.hi)).collect();
+    let cfg = PropConfig { vary, vary_seed, cases, seed };
+    match ctlgraph::prop::run(graph, &cfg)? {
+        PropOutcome::Held { cases } => {
+            let seeds = if vary_seed { " and random seeds" } else { "" };
+            println!("{}: checks hold in {cases} cases for {}{seeds}", graph.display(), ranges.join(", "));
+            Ok(())
+        }
+        PropOutcome::Failed { minimal, reason, after, shrink_steps } => {
+            println!(
+                "{}: a check fails (case {after} of {cases}); shrunk in {shrink_steps} steps to:",
+                graph.display()
+            );
+            for (n, v) in &minimal.values {
+                println!("  {n} = {v}");
+            }
+            if let Some(s) = minimal.seed {
+                println!("  seed = {s}");
+            }
+            match reason {
+                Ok(results) => results.iter().filter(|r| !r.passed).for_each(|r| println!("  {r}")),
+                Err(e) => println!("  {e}"),
+            }
+            println!("reproduce: {}", minimal.command(graph));
+            Err(Failure::Run(String::new()))
+        }
+    }
 }

@@ -1,6 +1,7 @@
 //! The machine-readable run report (`--report FILE.json`).
 
 use ctlgraph_core::RunStats;
+use ctlgraph_core::checks::CheckResult;
 use ctlgraph_solver::Method;
 use serde_json::{Value, json};
 use sha2::{Digest, Sha256};
@@ -16,6 +17,7 @@ pub struct RunInfo<'a> {
     pub simulated: f64,
     pub wall_seconds: f64,
     pub error: Option<String>,
+    pub checks: &'a [CheckResult],
 }
 
 /// SHA-256 of the graph file, lowercase hex.
@@ -51,7 +53,10 @@ pub fn to_json(info: &RunInfo) -> Value {
         "stop_time": info.stop,
         "simulated_time": info.simulated,
         "wall_time_seconds": info.wall_seconds,
-        "status": if info.error.is_some() { "failed" } else { "ok" },
+        "checks": info.checks.iter().map(|c| json!({
+            "name": c.name, "measured": c.measured, "op": c.op.symbol(), "bound": c.bound, "passed": c.passed,
+        })).collect::<Vec<_>>(),
+        "status": if info.error.is_some() { "failed" } else if info.checks.iter().any(|c| !c.passed) { "checks failed" } else { "ok" },
         "error": info.error,
     })
 }

@@ -54,6 +54,9 @@ pub struct FlatGraph {
     pub wires: Vec<FlatWire>,
     pub records: Vec<(String, Endpoint)>,
     pub record_every: usize,
+    /// The top-level file's checks (a subsystem's own checks are not run
+    /// when it is included).
+    pub checks: Vec<crate::checks::CheckSpec>,
     /// Subsystem path → its (inports, outports), for resolving records.
     pub subsystems: HashMap<String, (Vec<String>, Vec<String>)>,
 }
@@ -99,6 +102,7 @@ pub fn load_str(text: &str, file: Arc<str>, overrides: &[(String, String)]) -> R
         wires: Vec::new(),
         records: Vec::new(),
         record_every: graph.record_every.as_ref().map_or(1, |e| e.0),
+        checks: graph.checks.clone(),
         subsystems: HashMap::new(),
     };
     let mut stack = vec![canonical(Path::new(&*file))];

@@ -7,6 +7,7 @@
 //! widths, rates, execution order) → [`sim::Simulator`].
 
 pub mod block;
+pub mod checks;
 pub mod compile;
 pub mod diag;
 pub mod expr;
@@ -15,6 +16,7 @@ pub mod params;
 pub mod registry;
 pub mod sim;
 pub mod spec;
+pub mod trace;
 pub mod yaml;
 
 pub use block::{Block, Interface, Io, SampleTime, Width};

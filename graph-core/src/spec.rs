@@ -2,11 +2,12 @@
 //! subsystems expanded. Values stay as positioned YAML until the block
 //! type that interprets them is known.
 
+use crate::checks::CheckSpec;
 use crate::diag::{Diagnostic, Pos};
 use crate::yaml::{self, Key, Kind, Yaml};
 use std::sync::Arc;
 
-const TOP_KEYS: [&str; 7] = ["name", "description", "parameters", "simulation", "blocks", "wires", "record"];
+const TOP_KEYS: [&str; 8] = ["name", "description", "parameters", "simulation", "blocks", "wires", "record", "checks"];
 
 /// One graph file.
 #[derive(Clone, Debug)]
@@ -22,6 +23,8 @@ pub struct GraphFile {
     pub record: Vec<RecordSpec>,
     /// Log every n-th major step (1 = all).
     pub record_every: Option<(usize, Pos)>,
+    /// Acceptance conditions over the recorded signals.
+    pub checks: Vec<CheckSpec>,
 }
 
 #[derive(Clone, Debug)]
@@ -101,7 +104,12 @@ impl GraphFile {
             Some(r) => parse_record(r)?,
             None => (Vec::new(), None),
         };
+        let checks = match yaml::lookup(top, "checks") {
+            Some(c) => seq(c, "`checks`")?.iter().map(parse_check).collect::<Result<_, _>>()?,
+            None => Vec::new(),
+        };
         Ok(GraphFile {
+            checks,
             name: text_of("name")?,
             description: text_of("description")?,
             parameters,
@@ -190,6 +198,19 @@ fn parse_wire(v: &Yaml) -> Result<WireSpec, Diagnostic> {
     let dsts =
         dsts.split(',').map(|d| parse_endpoint(d, v.pos.shifted(offset_of(d)))).collect::<Result<Vec<_>, _>>()?;
     Ok(WireSpec { src: src_ep, dsts })
+}
+
+/// A check: `"text"` or `name: "text"`.
+fn parse_check(item: &Yaml) -> Result<CheckSpec, Diagnostic> {
+    match &item.kind {
+        Kind::Str(s) => Ok(CheckSpec { name: None, text: s.clone(), pos: item.pos.clone() }),
+        Kind::Map(m) if m.len() == 1 => {
+            let (k, v) = &m[0];
+            let text = v.expect_str(&format!("check `{}`", k.name))?;
+            Ok(CheckSpec { name: Some(k.name.clone()), text: text.to_string(), pos: v.pos.clone() })
+        }
+        _ => Err(Diagnostic::at(&item.pos, "a check is `\"metric(...) < bound\"` or `name: \"metric(...) < bound\"`")),
+    }
 }
 
 type Records = (Vec<RecordSpec>, Option<(usize, Pos)>);

@@ -81,6 +81,8 @@ pub struct Model {
     pub clocks: Vec<(f64, f64)>,
     pub columns: Vec<Column>,
     pub record_every: usize,
+    /// The graph's acceptance conditions, compiled against `columns`.
+    pub checks: Vec<crate::checks::Check>,
     pub edges: Vec<Edge>,
     pub sim: SimConfig,
     pub name: Option<String>,
@@ -178,7 +180,9 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         .iter()
         .map(|m| Slot { rate: m.rate, states: m.states.clone(), inputs: m.inputs.clone(), outputs: m.outputs.clone() })
         .collect();
+    let checks = crate::checks::compile(&g.checks, &headers(&columns), &g.parameters)?;
     Ok(Model {
+        checks,
         blocks: model_blocks,
         meta,
         slots,
@@ -196,6 +200,18 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     })
 }
 
+fn headers(columns: &[Column]) -> Vec<String> {
+    let mut h = vec!["t".to_string()];
+    for c in columns {
+        if c.width == 1 {
+            h.push(c.name.clone());
+        } else {
+            h.extend((1..=c.width).map(|k| format!("{}[{k}]", c.name)));
+        }
+    }
+    h
+}
+
 fn resolved(w: Width, common: Option<usize>) -> usize {
     match w {
         Width::Fixed(n) => n,
@@ -207,15 +223,7 @@ impl Model {
     /// Column headers: `t`, then each recorded name (`name[k]`, 1-based, for
     /// vector signals).
     pub fn headers(&self) -> Vec<String> {
-        let mut h = vec!["t".to_string()];
-        for c in &self.columns {
-            if c.width == 1 {
-                h.push(c.name.clone());
-            } else {
-                h.extend((1..=c.width).map(|k| format!("{}[{k}]", c.name)));
-            }
-        }
-        h
+        headers(&self.columns)
     }
 
     /// The block owning signal `offset` and the name of its output port.

@@ -31,6 +31,23 @@ pub trait Scope {
     fn lookup(&self, name: &str) -> Option<Binding>;
     /// All names, for "did you mean" hints.
     fn names(&self) -> Vec<String>;
+
+    /// Whether `name` is a signal that functions such as `peak(e, 0.6, 1.2)`
+    /// take as first argument (the `checks:` metrics).
+    fn is_signal(&self, _name: &str) -> bool {
+        false
+    }
+
+    /// Whether `function` is a function of a signal.
+    fn is_signal_function(&self, _function: &str) -> bool {
+        false
+    }
+
+    /// Registers a call of a signal function, evaluated outside the
+    /// expression, and returns the variable slot its value will occupy.
+    fn signal_call(&self, function: &str, _signal: &str, _args: Vec<Expr>) -> Result<usize, String> {
+        Err(format!("`{function}` is not available here"))
+    }
 }
 
 /// A parse error at a character offset within the expression text.
@@ -424,6 +441,9 @@ impl Parser<'_> {
     }
 
     fn call(&mut self, name: &str, offset: usize) -> Result<Node, ExprError> {
+        if let Some(signal) = self.signal_argument(name) {
+            return self.signal_call(name, &signal, offset);
+        }
         let mut args = vec![self.expr()?];
         while self.eat(',') {
             args.push(self.expr()?);
@@ -458,6 +478,35 @@ impl Parser<'_> {
         let all = FUNC1.iter().map(|(n, _)| *n).chain(FUNC2).chain(VARIADIC);
         let hint = crate::diag::closest(name, all).map(|c| format!("did you mean `{c}`?"));
         Err(ExprError { offset, message: format!("unknown function `{name}`"), hint })
+    }
+
+    /// The signal named by the first argument of `function(`, when the
+    /// scope has such a function and such a signal (`max(y, 0, 1)` is the
+    /// metric; `max(a, b)` of numbers stays the built-in).
+    fn signal_argument(&self, function: &str) -> Option<String> {
+        if !self.scope.is_signal_function(function) {
+            return None;
+        }
+        let (Some(first), Some(next)) = (self.tokens.get(self.at), self.tokens.get(self.at + 1)) else { return None };
+        match (&first.kind, &next.kind) {
+            (TokKind::Name(sig), TokKind::Sym(',' | ')')) if self.scope.is_signal(sig) => Some(sig.clone()),
+            _ => None,
+        }
+    }
+
+    fn signal_call(&mut self, function: &str, signal: &str, offset: usize) -> Result<Node, ExprError> {
+        self.at += 1;
+        let mut args = Vec::new();
+        while self.eat(',') {
+            args.push(Expr { root: fold(self.expr()?) });
+        }
+        self.expect(')')?;
+        let slot = self.scope.signal_call(function, signal, args).map_err(|message| ExprError {
+            offset,
+            message,
+            hint: None,
+        })?;
+        Ok(Node::Var(slot))
     }
 }
 

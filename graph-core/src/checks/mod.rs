@@ -1,0 +1,272 @@
+//! A graph's own acceptance conditions: `checks:` entries such as
+//! `settling_time(y, 1.0, 0.02) < 0.15` or
+//! `peak(e_fladrc, 0.6, 1.2) < 0.2 * peak(e_fpid, 0.6, 1.2)`, compiled
+//! against the recorded signals and evaluated after a run.
+//!
+//! A check is `expression OP expression` with OP one of `< <= > >=`; the
+//! left side is reported as the measured value, the right as the bound.
+//! Both sides use the expression language with the graph's parameters and
+//! the metrics of [`metrics::METRICS`], whose first argument is a recorded
+//! signal and whose last two optional arguments are a time window.
+
+pub mod metrics;
+
+use crate::diag::{Diagnostic, Pos};
+use crate::expr::{Binding, Constants, Expr, Scope};
+use crate::params::expr_diagnostic;
+use crate::trace::Trace;
+use metrics::{METRICS, Metric};
+use std::cell::RefCell;
+
+/// A check as written: optional name, text, position of the text.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CheckSpec {
+    pub name: Option<String>,
+    pub text: String,
+    pub pos: Pos,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Comparison {
+    Less,
+    LessEqual,
+    Greater,
+    GreaterEqual,
+}
+
+impl Comparison {
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Comparison::Less => "<",
+            Comparison::LessEqual => "<=",
+            Comparison::Greater => ">",
+            Comparison::GreaterEqual => ">=",
+        }
+    }
+
+    fn holds(self, a: f64, b: f64) -> bool {
+        match self {
+            Comparison::Less => a < b,
+            Comparison::LessEqual => a <= b,
+            Comparison::Greater => a > b,
+            Comparison::GreaterEqual => a >= b,
+        }
+    }
+}
+
+/// One metric evaluation a check needs: metric, trace column, arguments.
+#[derive(Clone, Debug)]
+struct MetricCall {
+    metric: Metric,
+    column: usize,
+    args: Vec<Expr>,
+}
+
+/// A compiled check.
+#[derive(Clone, Debug)]
+pub struct Check {
+    /// The given name, or the text itself.
+    pub name: String,
+    pub text: String,
+    pub pos: Pos,
+    lhs: Expr,
+    op: Comparison,
+    rhs: Expr,
+    calls: Vec<MetricCall>,
+}
+
+/// The outcome of one check.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CheckResult {
+    pub name: String,
+    pub measured: f64,
+    pub op: Comparison,
+    pub bound: f64,
+    pub passed: bool,
+}
+
+impl std::fmt::Display for CheckResult {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let verdict = if self.passed { "pass" } else { "FAIL" };
+        let (m, b) = (significant(self.measured), significant(self.bound));
+        write!(f, "{verdict}  {}  (measured {m}, bound {} {b})", self.name, self.op.symbol())
+    }
+}
+
+/// A number to six significant digits, in its shortest form.
+fn significant(v: f64) -> String {
+    if !v.is_finite() || v == 0.0 {
+        return v.to_string();
+    }
+    let rounded: f64 = format!("{v:.5e}").parse().unwrap_or(v);
+    if (1e-4..1e6).contains(&rounded.abs()) { rounded.to_string() } else { format!("{rounded:e}") }
+}
+
+/// Names the expressions of a check may use: parameters, and recorded
+/// signals inside metric calls.
+struct CheckScope<'a> {
+    params: &'a [(String, f64)],
+    headers: &'a [String],
+    calls: RefCell<Vec<MetricCall>>,
+}
+
+impl Scope for CheckScope<'_> {
+    fn lookup(&self, name: &str) -> Option<Binding> {
+        Constants(self.params).lookup(name)
+    }
+
+    fn names(&self) -> Vec<String> {
+        let signals = self.headers.iter().skip(1).filter(|h| !h.contains('['));
+        Constants(self.params).names().into_iter().chain(signals.cloned()).collect()
+    }
+
+    fn is_signal(&self, name: &str) -> bool {
+        self.headers.iter().skip(1).any(|h| h == name)
+    }
+
+    fn is_signal_function(&self, function: &str) -> bool {
+        Metric::from_name(function).is_some()
+    }
+
+    fn signal_call(&self, function: &str, signal: &str, args: Vec<Expr>) -> Result<usize, String> {
+        let (metric, own) = Metric::from_name(function).ok_or_else(|| format!("unknown metric `{function}`"))?;
+        if args.len() < own.len() || args.len() > own.len() + 2 {
+            let mut form = vec!["signal".to_string()];
+            form.extend(own.iter().map(|a| a.to_string()));
+            return Err(format!(
+                "`{function}` takes ({}[, t_from[, t_to]]), got {} argument(s)",
+                form.join(", "),
+                args.len() + 1
+            ));
+        }
+        let column = self.headers.iter().position(|h| h == signal).ok_or_else(|| format!("no signal `{signal}`"))?;
+        let mut calls = self.calls.borrow_mut();
+        calls.push(MetricCall { metric, column, args });
+        Ok(calls.len() - 1)
+    }
+}
+
+/// Splits `a OP b` at its comparison; OP's character offset and kind.
+fn split_comparison(text: &str) -> Option<(usize, usize, Comparison)> {
+    let (i, c) = text.char_indices().find(|(_, c)| *c == '<' || *c == '>')?;
+    let eq = text[i + 1..].starts_with('=');
+    let op = match (c, eq) {
+        ('<', false) => Comparison::Less,
+        ('<', true) => Comparison::LessEqual,
+        ('>', false) => Comparison::Greater,
+        _ => Comparison::GreaterEqual,
+    };
+    Some((i, if eq { 2 } else { 1 }, op))
+}
+
+/// Compiles checks against the recorded column `headers` (first is `t`).
+pub fn compile(specs: &[CheckSpec], headers: &[String], params: &[(String, f64)]) -> Result<Vec<Check>, Diagnostic> {
+    specs.iter().map(|spec| compile_one(spec, headers, params)).collect()
+}
+
+fn compile_one(spec: &CheckSpec, headers: &[String], params: &[(String, f64)]) -> Result<Check, Diagnostic> {
+    let text = spec.text.as_str();
+    let Some((at, len, op)) = split_comparison(text) else {
+        return Err(Diagnostic::at(&spec.pos, format!("check `{text}` compares nothing"))
+            .with_hint("a check is `expression < bound` (or <=, >, >=), e.g. `max_abs(e, 1.0) < 0.01`"));
+    };
+    if split_comparison(&text[at + len..]).is_some() {
+        return Err(Diagnostic::at(&spec.pos, format!("check `{text}` has more than one comparison"))
+            .with_hint("write one check per condition"));
+    }
+    let scope = CheckScope { params, headers, calls: RefCell::new(Vec::new()) };
+    let chars_before = |byte: usize| text[..byte].chars().count();
+    let side = |from: usize, to: usize| -> Result<Expr, Diagnostic> {
+        let part = &text[from..to];
+        let pos = spec.pos.shifted(chars_before(from));
+        if part.trim().is_empty() {
+            return Err(Diagnostic::at(&pos, "this side of the comparison is empty"));
+        }
+        Expr::parse(part, &scope).map_err(|e| {
+            let d = expr_diagnostic(&e, &pos);
+            let d = Diagnostic { message: format!("check: {}", d.message), ..d };
+            if e.message.starts_with("unknown name") {
+                d.or_hint("signals are read through metrics, e.g. final_value(y); only recorded signals count")
+            } else {
+                d
+            }
+        })
+    };
+    let lhs = side(0, at)?;
+    let rhs = side(at + len, text.len())?;
+    let name = spec.name.clone().unwrap_or_else(|| text.trim().to_string());
+    Ok(Check { name, text: text.to_string(), pos: spec.pos.clone(), lhs, op, rhs, calls: scope.calls.into_inner() })
+}
+
+impl Check {
+    /// Evaluates the check on a run's recorded signals.
+    pub fn evaluate(&self, trace: &Trace) -> CheckResult {
+        let t = trace.t();
+        let mut vars = vec![f64::NAN; self.calls.len()];
+        for (k, call) in self.calls.iter().enumerate() {
+            let args: Vec<f64> = call.args.iter().map(|a| a.eval(&vars)).collect();
+            vars[k] = metrics::evaluate(call.metric, t, &trace.columns[call.column], &args);
+        }
+        let (measured, bound) = (self.lhs.eval(&vars), self.rhs.eval(&vars));
+        CheckResult { name: self.name.clone(), measured, op: self.op, bound, passed: self.op.holds(measured, bound) }
+    }
+}
+
+/// The metric names, for documentation.
+pub fn metric_names() -> impl Iterator<Item = &'static str> {
+    METRICS.iter().map(|(n, _, _)| *n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn trace() -> Trace {
+        let mut tr = Trace::new(vec!["t".into(), "y".into(), "e".into()]);
+        for i in 0..=100 {
+            let t = i as f64 / 100.0;
+            tr.push(&[t, t * t, 1.0 - t]);
+        }
+        tr
+    }
+
+    fn spec(text: &str) -> CheckSpec {
+        CheckSpec { name: None, text: text.into(), pos: Pos::new("g.yaml".into(), 7, 5) }
+    }
+
+    fn run(text: &str) -> CheckResult {
+        let tr = trace();
+        let params = vec![("k".to_string(), 2.0)];
+        compile(&[spec(text)], &tr.headers, &params).unwrap()[0].evaluate(&tr)
+    }
+
+    #[test]
+    fn measured_bound_and_verdict() {
+        let r = run("final_value(y) >= 0.5 * k");
+        assert_eq!((r.measured, r.bound, r.passed), (1.0, 1.0, true));
+        let r = run("max(e, 0.5) < max(y, 0, 0.5)");
+        assert_eq!((r.measured, r.bound, r.passed), (0.5, 0.25, false));
+        assert_eq!(r.to_string(), "FAIL  max(e, 0.5) < max(y, 0, 0.5)  (measured 0.5, bound < 0.25)");
+        // The built-in max of numbers still works beside the metric.
+        assert!(run("max(1, 2) <= 2").passed);
+        let r = run("settling_time(y, final_value(y), 0.02) < 1");
+        assert!(r.passed && (r.measured - 0.98f64.sqrt()).abs() < 1e-3, "{r:?}");
+    }
+
+    #[test]
+    fn errors_point_into_the_check() {
+        let tr = trace();
+        let err = |text: &str| compile(&[spec(text)], &tr.headers, &[]).unwrap_err();
+        let d = err("peak(ee, 0.6) < 1");
+        assert_eq!((d.pos.clone().unwrap().col, d.message.as_str()), (10, "check: unknown name `ee`"));
+        assert_eq!(d.hint.as_deref(), Some("did you mean `e`?"));
+        let d = err("final_value(y) = 1");
+        assert!(d.message.contains("compares nothing"), "{d}");
+        let d = err("overshoot(y) < 5");
+        assert_eq!(d.message, "check: `overshoot` takes (signal, target[, t_from[, t_to]]), got 1 argument(s)");
+        let d = err("0 < final_value(y) < 1");
+        assert!(d.message.contains("more than one comparison"), "{d}");
+        let d = err("peak(e) < ");
+        assert_eq!((d.pos.unwrap().col, d.message.as_str()), (14, "this side of the comparison is empty"));
+    }
+}
