@@ -19,8 +19,8 @@ pub use ctlgraph_blocks as blocks;
 pub use ctlgraph_core as core;
 pub use ctlgraph_solver as solver;
 
-use ctlgraph_core::{Diagnostic, Model, Registry, SimError, Simulator};
-use record::{Recorder, Trace};
+pub use ctlgraph_core::trace::simulate;
+use ctlgraph_core::{Diagnostic, Model, Registry};
 use std::path::Path;
 
 /// The full block library.
@@ -45,15 +45,4 @@ pub fn compile_file_with(path: &Path, sets: &[(String, String)], registry: &Regi
 pub fn compile_str(text: &str, name: &str, sets: &[(String, String)]) -> Result<Model, Diagnostic> {
     let flat = ctlgraph_core::load_str(text, name.into(), sets)?;
     ctlgraph_core::compile(&flat, &registry())
-}
-
-/// Runs a model to its stop time (or `stop`) and returns the recorded
-/// signals in memory.
-pub fn simulate(model: Model, stop: Option<f64>) -> Result<Trace, SimError> {
-    let mut sim = Simulator::new(model, stop);
-    let mut recorder = Recorder::new(sim.model());
-    let mut trace = Trace::new(sim.model().headers());
-    sim.run(&mut |t, signals| recorder.sample(t, signals, &mut |row| trace.push(row)))?;
-    recorder.flush(&mut |row| trace.push(row));
-    Ok(trace)
 }

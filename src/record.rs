@@ -1,61 +1,11 @@
-//! Recording: picking the recorded columns out of the signal buffer at
-//! major steps (with decimation), keeping them in memory, or streaming them
-//! to a CSV file that appears whole or not at all.
+//! Output files: recorded signals streamed to a CSV file that appears whole
+//! or not at all, and atomic writes for plots and reports. (Recording
+//! itself lives in `ctlgraph_core::trace`.)
 
-use ctlgraph_core::Model;
-use ctlgraph_core::compile::Column;
-pub use ctlgraph_core::trace::Trace;
+pub use ctlgraph_core::trace::{Recorder, Trace};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
-
-/// Turns signal buffers into rows `[t, col1, col2, …]`, every `every`-th
-/// major step plus the last one. Allocates only in `new`.
-pub struct Recorder {
-    columns: Vec<Column>,
-    every: usize,
-    count: usize,
-    row: Vec<f64>,
-    row_written: bool,
-}
-
-impl Recorder {
-    pub fn new(model: &Model) -> Self {
-        let width: usize = model.columns.iter().map(|c| c.width).sum();
-        Recorder {
-            columns: model.columns.clone(),
-            every: model.record_every.max(1),
-            count: 0,
-            row: vec![0.0; 1 + width],
-            row_written: true,
-        }
-    }
-
-    /// Offers the signals of one major step; `out` receives the row when
-    /// this step is logged.
-    pub fn sample(&mut self, t: f64, signals: &[f64], out: &mut dyn FnMut(&[f64])) {
-        self.row[0] = t;
-        let mut k = 1;
-        for c in &self.columns {
-            self.row[k..k + c.width].copy_from_slice(&signals[c.offset..c.offset + c.width]);
-            k += c.width;
-        }
-        self.row_written = self.count.is_multiple_of(self.every);
-        if self.row_written {
-            out(&self.row);
-        }
-        self.count += 1;
-    }
-
-    /// Emits the last step if decimation skipped it, so every log ends at
-    /// the stop time.
-    pub fn flush(&mut self, out: &mut dyn FnMut(&[f64])) {
-        if !self.row_written {
-            out(&self.row);
-            self.row_written = true;
-        }
-    }
-}
 
 /// A CSV file written to a temporary name beside its destination and
 /// renamed into place by [`CsvFile::commit`]; dropped uncommitted, it

@@ -1,5 +1,68 @@
-//! Recorded signals in memory: what plots are drawn from and checks are
-//! evaluated on.
+//! Recording: picking the recorded columns out of the signal buffer at
+//! major steps (with decimation), and keeping them in memory — what plots
+//! are drawn from and checks are evaluated on.
+
+use crate::compile::{Column, Model};
+use crate::sim::{SimError, Simulator};
+
+/// Runs a model to its stop time (or `stop`) and returns the recorded
+/// signals in memory.
+pub fn simulate(model: Model, stop: Option<f64>) -> Result<Trace, SimError> {
+    let mut sim = Simulator::new(model, stop);
+    let mut recorder = Recorder::new(sim.model());
+    let mut trace = Trace::new(sim.model().headers());
+    sim.run(&mut |t, signals| recorder.sample(t, signals, &mut |row| trace.push(row)))?;
+    recorder.flush(&mut |row| trace.push(row));
+    Ok(trace)
+}
+
+/// Turns signal buffers into rows `[t, col1, col2, …]`, every `every`-th
+/// major step plus the last one. Allocates only in `new`.
+pub struct Recorder {
+    columns: Vec<Column>,
+    every: usize,
+    count: usize,
+    row: Vec<f64>,
+    row_written: bool,
+}
+
+impl Recorder {
+    pub fn new(model: &Model) -> Self {
+        let width: usize = model.columns.iter().map(|c| c.width).sum();
+        Recorder {
+            columns: model.columns.clone(),
+            every: model.record_every.max(1),
+            count: 0,
+            row: vec![0.0; 1 + width],
+            row_written: true,
+        }
+    }
+
+    /// Offers the signals of one major step; `out` receives the row when
+    /// this step is logged.
+    pub fn sample(&mut self, t: f64, signals: &[f64], out: &mut dyn FnMut(&[f64])) {
+        self.row[0] = t;
+        let mut k = 1;
+        for c in &self.columns {
+            self.row[k..k + c.width].copy_from_slice(&signals[c.offset..c.offset + c.width]);
+            k += c.width;
+        }
+        self.row_written = self.count.is_multiple_of(self.every);
+        if self.row_written {
+            out(&self.row);
+        }
+        self.count += 1;
+    }
+
+    /// Emits the last step if decimation skipped it, so every log ends at
+    /// the stop time.
+    pub fn flush(&mut self, out: &mut dyn FnMut(&[f64])) {
+        if !self.row_written {
+            out(&self.row);
+            self.row_written = true;
+        }
+    }
+}
 
 /// Recorded signals in memory, column-major.
 #[derive(Clone, Debug, Default, PartialEq)]
