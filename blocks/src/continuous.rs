@@ -16,7 +16,8 @@ pub const TYPES: &[BlockType] = &[
         summary: "y = ∫u dt, with initial condition and optional limits.",
         doc: "x' = u, y = x, elementwise. With limits, x stays in [lower, upper]: the derivative is \
               zeroed while x sits on a limit and u pushes outward, and x is projected back after each \
-              step (Simulink's limited integrator). No direct feedthrough: it closes loops legally.",
+              step (Simulink's limited integrator). No direct feedthrough: it closes loops legally.\n\
+              Bounds: with limits, y stays in [lower, upper] for any input; without, |y(t) − x(0)| <= t·sup|u| (not BIBO stable).",
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
@@ -32,7 +33,8 @@ pub const TYPES: &[BlockType] = &[
         summary: "Filtered derivative y = s/(τs + 1)·u.",
         doc: "A realisable derivative: y = (u − x)/τ with x' = (u − x)/τ, i.e. Y(s) = s/(τs + 1)·U(s). \
               It differentiates frequencies below 1/τ rad/s. x(0) = `initial_input`, so a signal that \
-              starts at that value gives no kick at t = 0.",
+              starts at that value gives no kick at t = 0.\n\
+              Stable region: τ > 0; then |y| <= 2·sup|u|/τ.",
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
@@ -48,7 +50,8 @@ pub const TYPES: &[BlockType] = &[
         doc: "Coefficients in descending powers of s (MATLAB's tf): num [1.639e4], den [1, 154.8, \
               2.242e4] is 1.639e4/(s² + 154.8 s + 2.242e4). Must be proper (deg num <= deg den). \
               Realised in controllable canonical form (MATLAB's tf2ss), zero initial state. Direct \
-              feedthrough only when deg num = deg den.",
+              feedthrough only when deg num = deg den.\n\
+              Stable region: every root of den in the open left half-plane; then |y| <= ‖g‖₁·sup|u|.",
         inputs: U_SCALAR,
         outputs: Y_SCALAR,
         params: &[
@@ -62,7 +65,8 @@ pub const TYPES: &[BlockType] = &[
         category: "dynamics",
         summary: "Continuous transfer function from zeros, poles and gain.",
         doc: "G(s) = gain·Π(s − zᵢ)/Π(s − pᵢ). A complex root is written [re, im] and stands for the \
-              conjugate pair re ± j·im. Realised like transfer_function.",
+              conjugate pair re ± j·im. Realised like transfer_function.\n\
+              Stable region: every pole with negative real part; then |y| <= ‖g‖₁·sup|u| and a unit step settles at the DC gain G(0).",
         inputs: U_SCALAR,
         outputs: Y_SCALAR,
         params: &[
@@ -77,7 +81,8 @@ pub const TYPES: &[BlockType] = &[
         category: "dynamics",
         summary: "x' = A x + B u, y = C x + D u.",
         doc: "Matrices as lists of rows. Input width = columns of B, output width = rows of C. D \
-              defaults to zero (no direct feedthrough).",
+              defaults to zero (no direct feedthrough).\n\
+              Stable region: A Hurwitz (every eigenvalue with negative real part).",
         inputs: &[PortDoc { name: "u", doc: "width = columns of B" }],
         outputs: &[PortDoc { name: "y", doc: "width = rows of C" }],
         params: &[

@@ -15,7 +15,8 @@ pub const TYPES: &[BlockType] = &[
         doc: "Coefficients in descending powers of z (Simulink's Discrete Transfer Fcn): num [1], den \
               [1, -0.5] is 1/(z − 0.5), i.e. y(k) = 0.5·y(k−1) + u(k−1). Realised as x(k+1) = A x(k) + \
               B u(k), y(k) = C x(k) + D u(k) in controllable canonical form; zero initial state. Must \
-              be proper; direct feedthrough only when deg num = deg den.",
+              be proper; direct feedthrough only when deg num = deg den.\n\
+              Stable region: every root of den strictly inside the unit circle; then |y| <= ‖h‖₁·sup|u| and a unit step settles at num(1)/den(1).",
         inputs: U_SCALAR,
         outputs: Y_SCALAR,
         params: &[
@@ -29,7 +30,8 @@ pub const TYPES: &[BlockType] = &[
         name: "unit_delay",
         category: "discrete",
         summary: "y(k) = u(k−1): one sample of delay.",
-        doc: "y(k) = x(k), x(k+1) = u(k), x(0) = initial. No direct feedthrough: it closes loops legally.",
+        doc: "y(k) = x(k), x(k+1) = u(k), x(0) = initial. No direct feedthrough: it closes loops legally.\n\
+              Bounds: |y| <= max(|initial|, sup|u|), for any period.",
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[param("initial", Some("0"), "y(0): a number or one per element"), SAMPLE_TIME_REQUIRED],
@@ -39,7 +41,8 @@ pub const TYPES: &[BlockType] = &[
         name: "zero_order_hold",
         category: "discrete",
         summary: "Samples its input every T seconds and holds it.",
-        doc: "y(t) = u(t_k) for t_k <= t < t_k + T.",
+        doc: "y(t) = u(t_k) for t_k <= t < t_k + T.\n\
+              Bounds: |y| <= sup|u|, for any period.",
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[SAMPLE_TIME_REQUIRED],

@@ -13,6 +13,8 @@ pub mod pid;
 pub mod routing;
 pub mod sources;
 pub mod tables;
+#[cfg(feature = "testing")]
+pub mod testing;
 
 /// A registry holding every block type of the library.
 pub fn registry() -> Registry {

@@ -9,7 +9,8 @@ pub const TYPES: &[BlockType] = &[
         name: "saturation",
         category: "nonlinear",
         summary: "Limits a signal to [lower, upper].",
-        doc: "y = min(max(u, lower), upper), elementwise. NaN in, NaN out (the run then stops).",
+        doc: "y = min(max(u, lower), upper), elementwise. NaN in, NaN out (the run then stops).\n\
+              Bounds: lower <= y <= upper always.",
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
@@ -42,7 +43,8 @@ pub const TYPES: &[BlockType] = &[
               `initial` and slews from there, so |dy/dt| never exceeds the limits. Continuous by \
               default (evaluated at minor steps too); with a sample time it is a discrete limiter. As in \
               Simulink, the slew starts from the previous major step, so a step input at t₀ is already \
-              partly passed at t₀.",
+              partly passed at t₀.\n\
+              Bounds: falling <= dy/dt <= rising between major steps, and |y| <= max(|initial|, sup|u|).",
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[

@@ -20,7 +20,8 @@ pub const TYPES: &[BlockType] = &[BlockType {
           Simulink's default), and the filter by backward Euler, x_f(k) = (x_f(k−1) + N·T·e(k))/(1 + N·T), \
           which is stable for every N·T.\n\
           `gain_inputs: [kp, ki]` adds input ports of those names whose values replace the parameters \
-          at every step (gain scheduling, fuzzy tuning).",
+          at every step (gain scheduling, fuzzy tuning).\n\
+              Bounds: lower <= u <= upper for any gains, input and anti-windup mode; with ki = 0 and limits infinite, |u| <= (kp + 2·kd·N)·sup|e|.",
     inputs: &[
         PortDoc { name: "e", doc: "control error (scalar)" },
         PortDoc { name: "kp, ki, kd", doc: "only those listed in `gain_inputs`" },
