@@ -40,6 +40,16 @@ pub fn compile_file_with(path: &Path, sets: &[(String, String)], registry: &Regi
     ctlgraph_core::compile(&ctlgraph_core::load(path, sets)?, registry)
 }
 
+/// Like [`compile_file`] with `simulation.seed` replaced (random blocks
+/// derive their streams from it when they are built).
+pub fn compile_file_seeded(path: &Path, sets: &[(String, String)], seed: Option<u64>) -> Result<Model, Diagnostic> {
+    let mut flat = ctlgraph_core::load(path, sets)?;
+    if let Some(s) = seed {
+        flat.sim.seed = s;
+    }
+    ctlgraph_core::compile(&flat, &registry())
+}
+
 /// Like [`compile_file`] for graph text in memory; `name` stands for the
 /// file in messages (and relative paths resolve from its folder).
 pub fn compile_str(text: &str, name: &str, sets: &[(String, String)]) -> Result<Model, Diagnostic> {

@@ -230,10 +230,8 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
     if let Some(t) = opts.stop_time.filter(|t| !(*t > 0.0 && t.is_finite())) {
         return Err(Diagnostic::plain(format!("--stop-time {t}: must be a positive number")).into());
     }
-    let mut model = compile(graph, sets)?;
-    if let Some(s) = opts.seed {
-        model.sim.seed = s;
-    }
+    let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
+    let model = ctlgraph::compile_file_seeded(graph, &sets, opts.seed)?;
     let seed = model.sim.seed;
     let checks = model.checks.clone();
     let mut sim = Simulator::new(model, opts.stop_time);

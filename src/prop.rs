@@ -80,12 +80,9 @@ pub enum PropOutcome {
 /// check fails or the run fails.
 fn evaluate(graph: &Path, case: &Case) -> (bool, Result<Vec<CheckResult>, Failure>) {
     let sets: Vec<(String, String)> = case.values.iter().map(|(n, v)| (n.clone(), v.to_string())).collect();
-    let result = crate::compile_file(graph, &sets).map_err(Failure::from).and_then(|mut model| {
-        if let Some(s) = case.seed {
-            model.sim.seed = s;
-        }
-        run_checks(model, None).map(|(_, r)| r)
-    });
+    let result = crate::compile_file_seeded(graph, &sets, case.seed)
+        .map_err(Failure::from)
+        .and_then(|model| run_checks(model, None).map(|(_, r)| r));
     let passed = matches!(&result, Ok(r) if r.iter().all(|c| c.passed));
     (passed, result)
 }

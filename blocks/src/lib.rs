@@ -8,6 +8,7 @@ use ctlgraph_core::registry::{ParamDoc, PortDoc, Registry};
 pub mod continuous;
 pub mod discrete;
 pub mod math;
+pub mod noise;
 pub mod nonlinear;
 pub mod pid;
 pub mod routing;
@@ -22,6 +23,7 @@ pub fn registry() -> Registry {
     for family in [
         sources::TYPES,
         tables::TYPES,
+        noise::TYPES,
         math::TYPES,
         nonlinear::TYPES,
         continuous::TYPES,
@@ -51,6 +53,10 @@ pub(crate) const Y_SCALAR: &[PortDoc] = &[PortDoc { name: "y", doc: "scalar" }];
 /// The `sample_time` parameter of blocks that inherit their rate by default.
 pub(crate) const SAMPLE_TIME_INHERITED: ParamDoc =
     param("sample_time", Some("-1"), "-1 inherit from inputs, 0 continuous, T > 0 every T seconds, [T, offset]");
+
+/// The optional active window of every source.
+pub(crate) const ACTIVE: ParamDoc =
+    param("active", Some("always"), "[t_on, t_off]: the source outputs zero before t_on and from t_off on");
 
 /// The `sample_time` parameter of sources, continuous by default.
 pub(crate) const SAMPLE_TIME_CONTINUOUS: ParamDoc =

@@ -1,6 +1,6 @@
 //! Sources: constant, step, ramp, sine, pulse, clock.
 
-use crate::{SAMPLE_TIME_CONTINUOUS, Y_SCALAR, param};
+use crate::{ACTIVE, SAMPLE_TIME_CONTINUOUS, Y_SCALAR, param};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 
@@ -12,7 +12,7 @@ pub const TYPES: &[BlockType] = &[
         doc: "y = value. Computed once, at the start of the run.",
         inputs: &[],
         outputs: &[PortDoc { name: "y", doc: "the value; width = number of elements of `value`" }],
-        params: &[param("value", Some("1"), "a number or a list of numbers")],
+        params: &[param("value", Some("1"), "a number or a list of numbers"), ACTIVE],
         build: build_constant,
     },
     BlockType {
@@ -28,6 +28,7 @@ pub const TYPES: &[BlockType] = &[
             param("initial", Some("0"), "value before `at`"),
             param("value", Some("1"), "value from `at` on"),
             SAMPLE_TIME_CONTINUOUS,
+            ACTIVE,
         ],
         build: build_step,
     },
@@ -43,6 +44,7 @@ pub const TYPES: &[BlockType] = &[
             param("start", Some("0"), "start time [s]"),
             param("initial", Some("0"), "output before `start`"),
             SAMPLE_TIME_CONTINUOUS,
+            ACTIVE,
         ],
         build: build_ramp,
     },
@@ -59,6 +61,7 @@ pub const TYPES: &[BlockType] = &[
             param("phase", Some("0"), "[rad]"),
             param("bias", Some("0"), "offset added to the wave"),
             SAMPLE_TIME_CONTINUOUS,
+            ACTIVE,
         ],
         build: build_sine,
     },
@@ -76,6 +79,7 @@ pub const TYPES: &[BlockType] = &[
             param("duty", Some("0.5"), "fraction of the period the pulse is high, in (0, 1)"),
             param("delay", Some("0"), "time of the first rising edge [s]"),
             SAMPLE_TIME_CONTINUOUS,
+            ACTIVE,
         ],
         build: build_pulse,
     },
@@ -86,7 +90,7 @@ pub const TYPES: &[BlockType] = &[
         doc: "y = t.",
         inputs: &[],
         outputs: Y_SCALAR,
-        params: &[SAMPLE_TIME_CONTINUOUS],
+        params: &[SAMPLE_TIME_CONTINUOUS, ACTIVE],
         build: build_clock,
     },
 ];
@@ -114,7 +118,65 @@ fn scalar_source<F: Fn(&Io) -> f64 + Send + 'static>(
     f: F,
 ) -> Result<Built, Diagnostic> {
     let st = p.sample_time(SampleTime::Continuous)?;
-    Ok(Built::new(TimeFn { f, events }, Interface::new(st).output("y", Width::Fixed(1))))
+    windowed(p, Built::new(TimeFn { f, events }, Interface::new(st).output("y", Width::Fixed(1))))
+}
+
+/// Zero outside an active window [on, off); the window's edges are events.
+struct Windowed {
+    inner: Box<dyn Block>,
+    on: f64,
+    off: f64,
+}
+
+impl Block for Windowed {
+    fn set_width(&mut self, width: usize) -> Result<(), String> {
+        self.inner.set_width(width)
+    }
+    fn num_states(&self) -> usize {
+        self.inner.num_states()
+    }
+    fn initialize(&mut self, x0: &mut [f64]) {
+        self.inner.initialize(x0);
+    }
+    fn output(&mut self, io: &mut Io) {
+        if io.reached(self.on) && !io.reached(self.off) {
+            self.inner.output(io);
+        } else {
+            for port in 0..io.num_outputs() {
+                io.output(port).iter_mut().for_each(|v| *v = 0.0);
+            }
+        }
+    }
+    fn update(&mut self, io: &mut Io) {
+        self.inner.update(io);
+    }
+    fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
+        self.inner.derivatives(io, dx);
+    }
+    fn clamp_states(&self, x: &mut [f64]) -> bool {
+        self.inner.clamp_states(x)
+    }
+    fn next_event(&self, t: f64) -> f64 {
+        let own = [self.on, self.off].into_iter().filter(|&e| e > t).fold(f64::INFINITY, f64::min);
+        own.min(self.inner.next_event(t))
+    }
+}
+
+/// Applies the optional `active: [t_on, t_off]` window to a built source.
+/// A windowed constant is no longer constant: it runs continuously.
+pub(crate) fn windowed(p: &mut Params, built: Built) -> Result<Built, Diagnostic> {
+    let Some(window) = p.opt_vector("active")? else { return Ok(built) };
+    let [on, off] = window[..] else {
+        return Err(p.error("active", format!("expected [t_on, t_off], got {} numbers", window.len())));
+    };
+    if on.is_nan() || off.is_nan() || off <= on {
+        return Err(p.error("active", format!("t_off ({off}) must be after t_on ({on})")));
+    }
+    let mut iface = built.iface;
+    if iface.sample_time == SampleTime::Constant {
+        iface.sample_time = SampleTime::Continuous;
+    }
+    Ok(Built { block: Box::new(Windowed { inner: built.block, on, off }), iface })
 }
 
 fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -129,7 +191,7 @@ fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
         }
     }
     let iface = Interface::new(SampleTime::Constant).output("y", Width::Fixed(value.len()));
-    Ok(Built::new(Constant(value), iface))
+    windowed(p, Built::new(Constant(value), iface))
 }
 
 fn build_step(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -162,7 +224,7 @@ fn build_pulse(p: &mut Params) -> Result<Built, Diagnostic> {
     let delay = p.number_or("delay", 0.0)?;
     let st = p.sample_time(SampleTime::Continuous)?;
     let pulse = Pulse { amplitude, period, high: duty * period, delay };
-    Ok(Built::new(pulse, Interface::new(st).output("y", Width::Fixed(1))))
+    windowed(p, Built::new(pulse, Interface::new(st).output("y", Width::Fixed(1))))
 }
 
 /// Edges are computed as `delay + k·period` (and `+ high`), the same

@@ -37,6 +37,7 @@ pub const TYPES: &[BlockType] = &[
             param("time", Some("t"), "header of the time column"),
             param("extrapolation", Some("hold"), "hold | linear | zero"),
             SAMPLE_TIME_CONTINUOUS,
+            crate::ACTIVE,
         ],
         build: build_from_csv,
     },
@@ -148,7 +149,7 @@ fn build_from_csv(p: &mut Params) -> Result<Built, Diagnostic> {
     let (ts, ys) = read_columns(&path, time, column).map_err(|m| p.error("file", m))?;
     let table = Table::new(ts, ys, outside).map_err(|m| p.error("file", format!("`{}`: {m}", path.display())))?;
     let st = p.sample_time(SampleTime::Continuous)?;
-    Ok(Built::new(Series(table), Interface::new(st).output("y", Width::Fixed(1))))
+    crate::sources::windowed(p, Built::new(Series(table), Interface::new(st).output("y", Width::Fixed(1))))
 }
 
 /// Reads two columns by header name; errors name the file, row and column.

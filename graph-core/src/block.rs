@@ -184,6 +184,10 @@ impl<'a> Io<'a> {
         self.signals[self.outputs[port].offset]
     }
 
+    pub fn num_outputs(&self) -> usize {
+        self.outputs.len()
+    }
+
     pub fn output_width(&self, port: usize) -> usize {
         self.outputs[port].width
     }

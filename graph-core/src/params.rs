@@ -21,6 +21,7 @@ pub struct Params<'a> {
     dir: &'a Path,
     docs: &'static [ParamDoc],
     used: Vec<bool>,
+    seed: u64,
 }
 
 impl<'a> Params<'a> {
@@ -35,7 +36,27 @@ impl<'a> Params<'a> {
         docs: &'static [ParamDoc],
     ) -> Self {
         let used = entries.iter().map(|(k, _)| k.name == "type").collect();
-        Params { block, type_name, block_pos, entries, scope, dir, docs, used }
+        Params { block, type_name, block_pos, entries, scope, dir, docs, used, seed: 0 }
+    }
+
+    /// Sets the graph's `simulation.seed`, from which random blocks derive
+    /// their streams.
+    pub fn with_seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    /// A seed for this block's random stream: the graph seed, the block's
+    /// full name and `extra` (the block's own `seed` parameter) mixed, so
+    /// adding a block elsewhere changes no other block's stream.
+    pub fn stream_seed(&self, extra: u64) -> u64 {
+        // FNV-1a over the name, then SplitMix64 finalisation of the mix.
+        let name =
+            self.block.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3));
+        let mut z = self.seed ^ name.rotate_left(17) ^ extra.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
     }
 
     /// The block's full name (`outer/inner` inside subsystems).

@@ -83,9 +83,13 @@ pub fn lookup<'a>(map: &'a [(Key, Yaml)], name: &str) -> Option<&'a Yaml> {
     map.iter().find(|(k, _)| k.name == name).map(|(_, v)| v)
 }
 
-/// Parses a YAML document; syntax errors carry their position.
+/// Parses a YAML document; syntax errors carry their position. Booleans
+/// are YAML 1.2's `true`/`false` only: blocks named `y`, `n`, `on` or
+/// `off` stay strings, as a control engineer would expect.
 pub fn parse(text: &str, file: &Arc<str>) -> Result<Yaml, Diagnostic> {
-    match serde_saphyr::from_str::<Spanned<Node>>(text) {
+    let mut options = serde_saphyr::Options::default();
+    options.strict_booleans = true;
+    match serde_saphyr::from_str_with_options::<Spanned<Node>>(text, options) {
         Ok(root) => Ok(convert(root, file)),
         Err(err) => Err(syntax_error(&err, file)),
     }
@@ -226,6 +230,15 @@ mod tests {
         let v = lookup(blocks, "v").unwrap();
         let Kind::Seq(items) = &v.kind else { panic!() };
         assert_eq!((items[1].pos.line, items[1].pos.col), (3, 10));
+    }
+
+    #[test]
+    fn yaml_1_1_booleans_are_strings() {
+        let y = parse("[y, n, on, off, yes, true]", &file()).unwrap();
+        let Kind::Seq(items) = y.kind else { panic!() };
+        let kinds: Vec<&Kind> = items.iter().map(|i| &i.kind).collect();
+        assert_eq!(kinds[..2], [&Kind::Str("y".into()), &Kind::Str("n".into())]);
+        assert_eq!(kinds[5], &Kind::Bool(true));
     }
 
     #[test]

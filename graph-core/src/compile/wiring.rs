@@ -23,7 +23,8 @@ pub(super) fn instantiate<'g>(g: &'g FlatGraph, reg: &Registry) -> Result<Vec<No
             .suggest(&spec.type_name, reg.names())
             .or_hint("`ctlgraph blocks` lists the block types"));
         };
-        let mut params = Params::new(&fb.path, ty.name, &spec.pos, &spec.params, &fb.scope, &fb.dir, ty.params);
+        let mut params = Params::new(&fb.path, ty.name, &spec.pos, &spec.params, &fb.scope, &fb.dir, ty.params)
+            .with_seed(g.sim.seed);
         if ty.name == INPORT || ty.name == OUTPORT {
             params.finish()?;
             if ty.name == INPORT && !fb.path.contains('/') {
