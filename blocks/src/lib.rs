@@ -5,6 +5,7 @@
 
 use ctlgraph_core::registry::{ParamDoc, PortDoc, Registry};
 
+pub mod adrc;
 pub mod continuous;
 pub mod discrete;
 pub mod math;
@@ -29,6 +30,7 @@ pub fn registry() -> Registry {
         continuous::TYPES,
         discrete::TYPES,
         pid::TYPES,
+        adrc::TYPES,
         routing::TYPES,
     ] {
         for ty in family {

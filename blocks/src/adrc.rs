@@ -1,0 +1,353 @@
+//! Active disturbance rejection control: Han's tracking differentiator,
+//! the linear extended state observer (LESO) and linear state error
+//! feedback (LSEF). Composed into LADRC by `graphs/lib/ladrc.yaml`.
+
+use crate::param;
+use ctlgraph_core::registry::{BlockType, Built, PortDoc};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+
+pub const TYPES: &[BlockType] = &[
+    BlockType {
+        name: "tracking_differentiator",
+        category: "control",
+        summary: "Han's discrete tracking differentiator: smooth reference r1 and its derivative r2.",
+        doc: "With h the sample time (Shi/Zhou/Li 2025, eq. 6–7; Han 2009):\n\
+              \x20 r1(k+1) = r1(k) + h·r2(k),  r2(k+1) = r2(k) + h·F(r1(k) − r(k), r2(k), δ, h0).\n\
+              `form: fst` (default): F = fst(x1, x2, δ, h0), Han's time-optimal synthesis function:\n\
+              \x20 d = δ·h0, d0 = h0·d, c = x1 + h0·x2, a0 = sqrt(d² + 8δ|c|),\n\
+              \x20 a = x2 + (a0 − d)/2·sign(c) if |c| > d0, else x2 + c/h0,\n\
+              \x20 F = −δ·sign(a) if |a| > d, else −δ·a/d.\n\
+              The paper prints c = x1 + h·x2; Han's original, implemented here, has c = x1 + h0·x2 \
+              (the two agree for h0 = h). `form: fhan`: Han's later fhan(x1, x2, δ, h0), exact for the \
+              discrete double integrator. δ is the largest acceleration of r1 (speed factor); h0 >= h \
+              filters noise on r (filter factor). Outputs are the states: no direct feedthrough.\n\
+              Stable region: δ > 0, h0 >= h; then r1 reaches a constant r without overshoot and r2 → 0.",
+        inputs: &[PortDoc { name: "r", doc: "reference (scalar)" }],
+        outputs: &[PortDoc { name: "r1", doc: "tracked reference" }, PortDoc { name: "r2", doc: "its derivative" }],
+        params: &[
+            param("delta", None, "speed factor δ > 0: largest |dr2/dt| [units/s²]"),
+            param("h0", Some("sample_time"), "filter factor h0 > 0 [s], usually a few sample times"),
+            param("form", Some("fst"), "fst (the paper's eq. 7) | fhan (Han's later form)"),
+            param("initial", Some("0"), "r1(0)"),
+            crate::SAMPLE_TIME_REQUIRED,
+        ],
+        build: build_td,
+    },
+    BlockType {
+        name: "leso",
+        category: "control",
+        summary: "Linear extended state observer of order n+1 for an n-th order plant.",
+        doc: "Model y⁽ⁿ⁾ = f + b0·u with the total disturbance f as extra state. With e = z1 − y:\n\
+              \x20 z_i' = z_{i+1} − β_i·e (i < n),  z_n' = z_{n+1} − β_n·e + b0·u,  z_{n+1}' = −β_{n+1}·e.\n\
+              Gains from the observer bandwidth ω (Gao 2003): β_i = C(n+1, i)·ωⁱ (n = 2: 3ω, 3ω², ω³), \
+              or given as `beta`. Continuous (states integrated by the solver) or, with a sample time \
+              h, discrete by forward Euler as the paper's eq. 8: z(k+1) = z(k) + h·z'(k). Output z is \
+              the state: no direct feedthrough, so the observer closes loops legally.\n\
+              Stable region: ω > 0 (continuous); 0 < ω·h < 2 (discrete: error poles at 1 − ω·h). Then \
+              z1 → y, z2 → y', …, and z_{n+1} → f for a slowly varying f.",
+        inputs: &[
+            PortDoc { name: "y", doc: "measured plant output" },
+            PortDoc { name: "u", doc: "plant input (control signal)" },
+        ],
+        outputs: &[PortDoc { name: "z", doc: "estimates [y, y', …, f], width n+1" }],
+        params: &[
+            param("order", Some("2"), "plant order n (1, 2 or 3)"),
+            param("omega", None, "observer bandwidth ω [rad/s] (or give `beta`)"),
+            param("beta", None, "explicit gains [β1 … β_{n+1}] instead of ω"),
+            param("b0", None, "input gain estimate b0"),
+            param("initial", Some("0"), "z(0): a number or n+1 numbers"),
+            param("sample_time", Some("0"), "0 continuous, h > 0 discrete (forward Euler)"),
+        ],
+        build: build_leso,
+    },
+    BlockType {
+        name: "lsef",
+        category: "control",
+        summary: "Linear state error feedback with disturbance compensation (the LADRC control law).",
+        doc: "The paper's eq. 9–10: e1 = r1 − z1, e2 = r2 − z2, u0 = α1·e1 + α2·e2, u = u0 − z3/b0 \
+              (order 1: u = α1·e1 − z2/b0). The gains act in control units directly; the textbook form \
+              u = (kp·e1 + kd·e2 − z3)/b0 is the same law with α = k/b0. `gain_inputs: [alpha1, alpha2]` \
+              adds ports whose values replace the gains at every step (fuzzy self-tuning). Optional \
+              output limits.\n\
+              Bounds: lower <= u <= upper.",
+        inputs: &[
+            PortDoc { name: "r1", doc: "reference (from the TD)" },
+            PortDoc { name: "r2", doc: "reference derivative (order 2 only)" },
+            PortDoc { name: "z", doc: "LESO state, width order+1" },
+            PortDoc { name: "alpha1, alpha2", doc: "only those listed in `gain_inputs`" },
+        ],
+        outputs: &[PortDoc { name: "u", doc: "control signal" }],
+        params: &[
+            param("alpha", None, "[α1, α2] (order 2) or [α1] (order 1)"),
+            param("b0", None, "input gain estimate, as in the LESO"),
+            param("order", Some("2"), "plant order (1 or 2)"),
+            param("lower", Some("-inf"), "lower output limit"),
+            param("upper", Some("inf"), "upper output limit"),
+            param("gain_inputs", Some("[]"), "gains read from ports each step: alpha1, alpha2"),
+            crate::SAMPLE_TIME_INHERITED,
+        ],
+        build: build_lsef,
+    },
+];
+
+fn sign(v: f64) -> f64 {
+    crate::math::sign(v)
+}
+
+/// Han's time-optimal synthesis function fst(x1, x2, δ, h0) with
+/// c = x1 + h0·x2 (see the block doc).
+pub fn fst(x1: f64, x2: f64, delta: f64, h0: f64) -> f64 {
+    let d = delta * h0;
+    let d0 = h0 * d;
+    let c = x1 + h0 * x2;
+    let a0 = (d * d + 8.0 * delta * c.abs()).sqrt();
+    let a = if c.abs() > d0 { x2 + (a0 - d) / 2.0 * sign(c) } else { x2 + c / h0 };
+    if a.abs() > d { -delta * sign(a) } else { -delta * a / d }
+}
+
+/// Han's fhan(x1, x2, r, h0) (Han 2009, eq. 21).
+pub fn fhan(x1: f64, x2: f64, r: f64, h0: f64) -> f64 {
+    let d = r * h0 * h0;
+    let a0 = h0 * x2;
+    let y = x1 + a0;
+    let a1 = (d * (d + 8.0 * y.abs())).sqrt();
+    let a2 = a0 + sign(y) * (a1 - d) / 2.0;
+    let sy = (sign(y + d) - sign(y - d)) / 2.0;
+    let a = (a0 + y - a2) * sy + a2;
+    let sa = (sign(a + d) - sign(a - d)) / 2.0;
+    -r * (a / d - sign(a)) * sa - r * sign(a)
+}
+
+/// The discrete tracking differentiator.
+pub struct TrackingDifferentiator {
+    pub delta: f64,
+    pub h0: f64,
+    pub h: f64,
+    pub fhan: bool,
+    pub initial: f64,
+    r1: f64,
+    r2: f64,
+}
+
+impl TrackingDifferentiator {
+    pub fn new(delta: f64, h0: f64, h: f64, fhan: bool, initial: f64) -> Self {
+        TrackingDifferentiator { delta, h0, h, fhan, initial, r1: initial, r2: 0.0 }
+    }
+
+    /// One step with reference `r`; returns the new (r1, r2).
+    pub fn step(&mut self, r: f64) -> (f64, f64) {
+        let x1 = self.r1 - r;
+        let f = if self.fhan { fhan(x1, self.r2, self.delta, self.h0) } else { fst(x1, self.r2, self.delta, self.h0) };
+        self.r1 += self.h * self.r2;
+        self.r2 += self.h * f;
+        (self.r1, self.r2)
+    }
+}
+
+impl Block for TrackingDifferentiator {
+    fn initialize(&mut self, _x0: &mut [f64]) {
+        self.r1 = self.initial;
+        self.r2 = 0.0;
+    }
+    fn output(&mut self, io: &mut Io) {
+        io.set(0, self.r1);
+        io.set(1, self.r2);
+    }
+    fn update(&mut self, io: &mut Io) {
+        self.step(io.u(0));
+    }
+}
+
+fn period(st: SampleTime) -> f64 {
+    match st {
+        SampleTime::Discrete { period, .. } => period,
+        _ => 0.0,
+    }
+}
+
+fn build_td(p: &mut Params) -> Result<Built, Diagnostic> {
+    let delta = p.number_where("delta", None, |v| v > 0.0 && v.is_finite(), "a positive speed factor")?;
+    let st = p.discrete_sample_time()?;
+    let h = period(st);
+    let h0 = p.number_where("h0", Some(h), |v| v > 0.0 && v.is_finite(), "a positive filter factor")?;
+    let fhan = p.choice("form", &["fst", "fhan"])? == "fhan";
+    let initial = p.number_or("initial", 0.0)?;
+    let iface = Interface::new(st)
+        .input("r", Width::Fixed(1), false)
+        .output("r1", Width::Fixed(1))
+        .output("r2", Width::Fixed(1));
+    Ok(Built::new(TrackingDifferentiator::new(delta, h0, h, fhan, initial), iface))
+}
+
+/// Binomial coefficient C(n, k) as f64 (small n).
+fn binomial(n: usize, k: usize) -> f64 {
+    (0..k).fold(1.0, |acc, i| acc * (n - i) as f64 / (i + 1) as f64)
+}
+
+/// Observer bandwidth gains β_i = C(n+1, i)·ωⁱ, i = 1 … n+1.
+pub fn bandwidth_gains(order: usize, omega: f64) -> Vec<f64> {
+    (1..=order + 1).map(|i| binomial(order + 1, i) * omega.powi(i as i32)).collect()
+}
+
+/// The LESO; discrete when `h > 0`.
+pub struct Leso {
+    beta: Vec<f64>,
+    b0: f64,
+    h: f64,
+    initial: Vec<f64>,
+    z: Vec<f64>,
+    dz: Vec<f64>,
+}
+
+impl Leso {
+    pub fn new(beta: Vec<f64>, b0: f64, h: f64, initial: Vec<f64>) -> Self {
+        let n = beta.len();
+        Leso { beta, b0, h, z: initial.clone(), initial, dz: vec![0.0; n] }
+    }
+
+    /// z' for state `z`, output `y`, input `u`.
+    pub fn derivative(&self, z: &[f64], y: f64, u: f64, dz: &mut [f64]) {
+        let n = z.len() - 1;
+        let e = z[0] - y;
+        for i in 0..n {
+            dz[i] = z[i + 1] - self.beta[i] * e;
+        }
+        dz[n - 1] += self.b0 * u;
+        dz[n] = -self.beta[n] * e;
+    }
+
+    /// The discrete state (for tests).
+    pub fn state(&self) -> &[f64] {
+        &self.z
+    }
+
+    /// One forward-Euler step (discrete form).
+    pub fn step(&mut self, y: f64, u: f64) {
+        let mut dz = std::mem::take(&mut self.dz);
+        self.derivative(&self.z, y, u, &mut dz);
+        for (z, d) in self.z.iter_mut().zip(&dz) {
+            *z += self.h * d;
+        }
+        self.dz = dz;
+    }
+}
+
+impl Block for Leso {
+    fn num_states(&self) -> usize {
+        if self.h > 0.0 { 0 } else { self.beta.len() }
+    }
+    fn initialize(&mut self, x0: &mut [f64]) {
+        self.z.copy_from_slice(&self.initial);
+        x0.copy_from_slice(if self.h > 0.0 { &[] } else { &self.initial[..] });
+    }
+    fn output(&mut self, io: &mut Io) {
+        let z = if self.h > 0.0 { &self.z[..] } else { io.x };
+        io.output(0).copy_from_slice(z);
+    }
+    fn update(&mut self, io: &mut Io) {
+        if self.h > 0.0 {
+            self.step(io.u(0), io.u(1));
+        }
+    }
+    fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
+        self.derivative(io.x, io.u(0), io.u(1), dx);
+    }
+}
+
+fn build_leso(p: &mut Params) -> Result<Built, Diagnostic> {
+    let order = p.count_or("order", 2)?;
+    if order > 3 {
+        return Err(p.error("order", format!("orders 1 to 3 are supported, got {order}")));
+    }
+    let beta = match (p.opt_number("omega")?, p.opt_vector("beta")?) {
+        (Some(w), None) if w > 0.0 && w.is_finite() => bandwidth_gains(order, w),
+        (Some(w), None) => return Err(p.error("omega", format!("must be a positive bandwidth, got {w}"))),
+        (None, Some(b)) if b.len() == order + 1 => b,
+        (None, Some(b)) => {
+            return Err(p.error("beta", format!("needs {} gains for order {order}, got {}", order + 1, b.len())));
+        }
+        (Some(_), Some(_)) => return Err(p.error("beta", "give either `omega` or `beta`, not both")),
+        (None, None) => return Err(p.block_error("missing parameter `omega` (or `beta`)")),
+    };
+    let b0 = p.number_where("b0", None, |v| v != 0.0 && v.is_finite(), "a nonzero input gain")?;
+    let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
+    let initial = crate::continuous::initial_vector(&initial, order + 1).map_err(|m| p.error("initial", m))?;
+    let st = p.sample_time(SampleTime::Continuous)?;
+    let h = match st {
+        SampleTime::Continuous => 0.0,
+        SampleTime::Discrete { period, .. } => period,
+        other => {
+            return Err(p.error("sample_time", format!("the LESO is continuous (0) or discrete (h > 0), not {other}")));
+        }
+    };
+    let iface = Interface::new(st)
+        .input("y", Width::Fixed(1), false)
+        .input("u", Width::Fixed(1), false)
+        .output("z", Width::Fixed(order + 1));
+    Ok(Built::new(Leso::new(beta, b0, h, initial), iface))
+}
+
+/// The LSEF law; `alpha_ports` are input indices of tuned gains.
+struct Lsef {
+    alpha: [f64; 2],
+    alpha_ports: [Option<usize>; 2],
+    b0: f64,
+    order: usize,
+    z_port: usize,
+    lower: f64,
+    upper: f64,
+}
+
+impl Block for Lsef {
+    fn output(&mut self, io: &mut Io) {
+        let a: [f64; 2] = std::array::from_fn(|i| self.alpha_ports[i].map_or(self.alpha[i], |p| io.u(p)));
+        let z = io.input(self.z_port);
+        let e1 = io.u(0) - z[0];
+        let u = if self.order == 2 {
+            let e2 = io.u(1) - z[1];
+            a[0] * e1 + a[1] * e2 - z[2] / self.b0
+        } else {
+            a[0] * e1 - z[1] / self.b0
+        };
+        io.set(0, u.clamp(self.lower, self.upper));
+    }
+}
+
+fn build_lsef(p: &mut Params) -> Result<Built, Diagnostic> {
+    let order = p.count_or("order", 2)?;
+    if order > 2 {
+        return Err(p.error("order", format!("orders 1 and 2 are supported, got {order}")));
+    }
+    let alpha = p.vector("alpha")?;
+    if alpha.len() != order {
+        return Err(p.error("alpha", format!("needs {order} gain(s) for order {order}, got {}", alpha.len())));
+    }
+    let b0 = p.number_where("b0", None, |v| v != 0.0 && v.is_finite(), "a nonzero input gain")?;
+    let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
+    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).input("r1", Width::Fixed(1), true);
+    if order == 2 {
+        iface = iface.input("r2", Width::Fixed(1), true);
+    }
+    let z_port = iface.inputs.len();
+    iface = iface.input("z", Width::Fixed(order + 1), true);
+    let mut alpha_ports = [None; 2];
+    for name in p.strings("gain_inputs")? {
+        let names = ["alpha1", "alpha2"];
+        let Some(i) = names[..order].iter().position(|g| *g == name) else {
+            return Err(p
+                .error("gain_inputs", format!("`{name}` is not a gain here: use {}", names[..order].join(", ")))
+                .suggest(name, names[..order].iter().copied()));
+        };
+        if alpha_ports[i].is_some() {
+            return Err(p.error("gain_inputs", format!("`{name}` is listed twice")));
+        }
+        alpha_ports[i] = Some(iface.inputs.len());
+        iface = iface.input(name, Width::Fixed(1), true);
+    }
+    let alpha = [alpha[0], alpha.get(1).copied().unwrap_or(0.0)];
+    let block = Lsef { alpha, alpha_ports, b0, order, z_port, lower, upper };
+    Ok(Built::new(block, iface.output("u", Width::Fixed(1))))
+}
+
+#[cfg(test)]
+mod tests;

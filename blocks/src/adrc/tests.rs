@@ -1,0 +1,67 @@
+use super::*;
+
+#[test]
+fn fst_first_steps_by_hand() {
+    // r = 1 from rest, δ = 100, h = h0 = 0.01:
+    // k = 0: x1 = −1, x2 = 0, d = 1, d0 = 0.01, c = −1, a0 = √801,
+    //        a = −(√801 − 1)/2 < −d, so F = −δ·sign(a) = 100:
+    //        r1 = 0 + h·0 = 0, r2 = 0 + h·100 = 1.
+    // k = 1: x1 = −1, x2 = 1, c = −0.99, a = 1 − (√793 − 1)/2 < −d, F = 100:
+    //        r1 = 0 + h·1 = 0.01, r2 = 1 + 1 = 2.
+    let mut td = TrackingDifferentiator::new(100.0, 0.01, 0.01, false, 0.0);
+    assert_eq!(td.step(1.0), (0.0, 1.0));
+    assert_eq!(td.step(1.0), (0.01, 2.0));
+    assert_eq!(fst(-1.0, 0.0, 100.0, 0.01), 100.0);
+    // Inside the linear zone F = −δ·a/d with a = x2 + c/h0.
+    let (x1, x2) = (1e-5, 0.0);
+    assert!((fst(x1, x2, 100.0, 0.01) - (-100.0 * (x1 / 0.01) / 1.0)).abs() < 1e-12);
+}
+
+fn track(form_fhan: bool, target: f64) -> (f64, f64, f64) {
+    let (h, delta) = (1e-4, 2.0e4);
+    let mut td = TrackingDifferentiator::new(delta, 5.0 * h, h, form_fhan, 0.0);
+    let mut peak = f64::NEG_INFINITY;
+    let mut last = (0.0, 0.0);
+    for _ in 0..10_000 {
+        last = td.step(target);
+        peak = peak.max(last.0);
+    }
+    (peak, last.0, last.1)
+}
+
+#[test]
+fn td_reaches_a_constant_reference_without_overshoot() {
+    for fhan in [false, true] {
+        let (peak, r1, r2) = track(fhan, 1.0);
+        assert!(peak <= 1.0 + 1e-9, "fhan = {fhan}: overshoot to {peak}");
+        assert!((r1 - 1.0).abs() < 1e-9 && r2.abs() < 1e-6, "fhan = {fhan}: r1 = {r1}, r2 = {r2}");
+    }
+    // Time-optimal: with |r̈1| <= δ a 1 mm step needs at least 2·sqrt(1/δ).
+    let mut td = TrackingDifferentiator::new(2.0e4, 5e-4, 1e-4, false, 0.0);
+    let k = (1..).find(|_| (td.step(1.0).0 - 1.0).abs() < 1e-3).unwrap();
+    let t = k as f64 * 1e-4;
+    assert!(t > 2.0 * (1.0f64 / 2.0e4).sqrt() && t < 0.03, "reached in {t} s");
+}
+
+#[test]
+fn bandwidth_gains_are_binomial() {
+    assert_eq!(bandwidth_gains(2, 10.0), vec![30.0, 300.0, 1000.0]);
+    assert_eq!(bandwidth_gains(1, 10.0), vec![20.0, 100.0]);
+    assert_eq!(bandwidth_gains(3, 2.0), vec![8.0, 24.0, 32.0, 16.0]);
+}
+
+#[test]
+fn discrete_leso_estimates_a_constant_disturbance_on_a_double_integrator() {
+    // y'' = f + b0·u with f = 3, u = 0.5: y = (f + b0 u) t²/2.
+    let (h, b0, f, u) = (1e-4, 2.0, 3.0, 0.5);
+    let mut leso = Leso::new(bandwidth_gains(2, 200.0), b0, h, vec![0.0; 3]);
+    for k in 0..20_000 {
+        let t = k as f64 * h;
+        leso.step((f + b0 * u) * t * t / 2.0, u);
+    }
+    let t = 20_000.0 * h;
+    let z = leso.state();
+    assert!((z[2] - f).abs() < 1e-3, "f estimate {}", z[2]);
+    assert!((z[1] - (f + b0 * u) * t).abs() < 1e-3, "velocity estimate {}", z[1]);
+    assert!((z[0] - (f + b0 * u) * t * t / 2.0).abs() < 1e-4, "position estimate {}", z[0]);
+}
