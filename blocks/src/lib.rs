@@ -8,6 +8,7 @@ use ctlgraph_core::registry::{ParamDoc, PortDoc, Registry};
 pub mod adrc;
 pub mod continuous;
 pub mod discrete;
+pub mod fuzzy;
 pub mod math;
 pub mod noise;
 pub mod nonlinear;
@@ -31,6 +32,7 @@ pub fn registry() -> Registry {
         discrete::TYPES,
         pid::TYPES,
         adrc::TYPES,
+        fuzzy::TYPES,
         routing::TYPES,
     ] {
         for ty in family {

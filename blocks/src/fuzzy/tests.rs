@@ -1,0 +1,148 @@
+use super::fis::*;
+
+const NAMES: [&str; 7] = ["NB", "NM", "NS", "ZO", "PS", "PM", "PB"];
+
+/// The paper's k1 rule table (Shi/Zhou/Li 2025), rows e1, columns e2.
+const K1: [&str; 7] = [
+    "PB PB PM PM PS ZO ZO",
+    "PB PB PM PS PS ZO NS",
+    "PM PM PM PS ZO NS NS",
+    "PM PM PS ZO NS NM NM",
+    "PS PS ZO NS NS NM NM",
+    "PS ZO NS NM NM NM NB",
+    "ZO ZO NM NM NM NB NB",
+];
+
+fn paper_k1(methods: Methods) -> Fis {
+    let var =
+        |name: &str, lo: f64, hi: f64| Variable { name: name.into(), lo, hi, terms: uniform_triangles(lo, hi, &NAMES) };
+    let mut rules = Vec::new();
+    for (i, row) in K1.iter().enumerate() {
+        for (j, cell) in row.split_whitespace().enumerate() {
+            let t = NAMES.iter().position(|n| *n == cell).unwrap();
+            rules.push(Rule {
+                antecedents: vec![(0, i, false), (1, j, false)],
+                connective: Connective::And,
+                consequents: vec![(0, t)],
+            });
+        }
+    }
+    Fis::new(vec![var("e1", -0.1, 0.1), var("e2", -0.1, 0.1)], vec![var("k1", -0.2, 0.2)], rules, methods, false)
+}
+
+fn eval(fis: &mut Fis, e1: f64, e2: f64) -> f64 {
+    let mut y = [0.0];
+    fis.eval(&[e1, e2], &mut y);
+    y[0]
+}
+
+/// Values computed once with scikit-fuzzy 0.5.0 (trimf, np.fmin/np.fmax,
+/// fuzz.defuzz) on np.linspace(-0.2, 0.2, 201), same membership functions.
+#[test]
+fn matches_scikit_fuzzy() {
+    let mut fis = paper_k1(Methods::default());
+    let reference = [
+        (0.0, 0.0, -1.1338973973348382e-17),
+        (0.03, -0.02, -0.018660994178235534),
+        (-0.07, 0.05, 0.03333861291096709),
+        (0.1, 0.1, -0.17776884623075384),
+        (0.2, -0.5, -1.1338973973348382e-17),
+        (0.013, 0.047, -0.09516694853829427),
+    ];
+    for (e1, e2, want) in reference {
+        let got = eval(&mut fis, e1, e2);
+        assert!((got - want).abs() < 1e-12, "({e1}, {e2}): {got} vs scikit-fuzzy {want}");
+    }
+    let variants = [
+        (Methods { defuzzification: Defuzzification::Bisector, ..Default::default() }, -0.08983050847457631),
+        (Methods { defuzzification: Defuzzification::MeanOfMaximum, ..Default::default() }, -0.06700000000000002),
+        (Methods { defuzzification: Defuzzification::SmallestOfMaximum, ..Default::default() }, -0.09400000000000001),
+        (Methods { defuzzification: Defuzzification::LargestOfMaximum, ..Default::default() }, -0.04000000000000001),
+        (
+            Methods { implication: Implication::Product, aggregation: Aggregation::Sum, ..Default::default() },
+            -0.09662988096562466,
+        ),
+        (Methods { implication: Implication::Product, ..Default::default() }, -0.09289900665642603),
+        (
+            Methods {
+                and: AndMethod::Product,
+                implication: Implication::Product,
+                aggregation: Aggregation::Sum,
+                ..Default::default()
+            },
+            -0.09400118811881195,
+        ),
+    ];
+    for (methods, want) in variants {
+        let got = eval(&mut paper_k1(methods), 0.013, 0.047);
+        assert!((got - want).abs() < 1e-12, "{methods:?}: {got} vs scikit-fuzzy {want}");
+    }
+}
+
+#[test]
+fn single_rule_by_hand() {
+    // One rule: if x is A then y is B, A = trimf(0, 1, 2), B = trimf(0, 1, 2)
+    // on [0, 2]. At x = 0.5 the rule fires at 0.5; min implication clips B at
+    // 0.5: a symmetric trapezoid, centroid 1; mom = mean of [0.5, 1.5] = 1;
+    // som 0.5, lom 1.5.
+    let var =
+        |n: &str| Variable { name: n.into(), lo: 0.0, hi: 2.0, terms: vec![("A".into(), Mf::Tri(0.0, 1.0, 2.0))] };
+    let rule = Rule { antecedents: vec![(0, 0, false)], connective: Connective::And, consequents: vec![(0, 0)] };
+    let run = |d: Defuzzification| {
+        let methods = Methods { defuzzification: d, resolution: 2001, ..Default::default() };
+        let mut fis = Fis::new(vec![var("x")], vec![var("y")], vec![rule.clone()], methods, false);
+        let mut y = [0.0];
+        fis.eval(&[0.5], &mut y);
+        y[0]
+    };
+    assert!((run(Defuzzification::Centroid) - 1.0).abs() < 1e-12);
+    assert!((run(Defuzzification::Bisector) - 1.0).abs() < 1e-12);
+    assert!((run(Defuzzification::MeanOfMaximum) - 1.0).abs() < 1e-12);
+    assert!((run(Defuzzification::SmallestOfMaximum) - 0.5).abs() < 1e-12);
+    assert!((run(Defuzzification::LargestOfMaximum) - 1.5).abs() < 1e-12);
+}
+
+#[test]
+fn symmetric_table_gives_zero_at_the_origin_and_stays_in_the_universe() {
+    let mut fis = paper_k1(Methods::default());
+    assert!(eval(&mut fis, 0.0, 0.0).abs() < 1e-15);
+    for i in -20..=20 {
+        for j in -20..=20 {
+            let y = eval(&mut fis, i as f64 * 0.01, j as f64 * 0.01);
+            assert!((-0.2..=0.2).contains(&y));
+        }
+    }
+}
+
+#[test]
+fn membership_functions_at_their_corners() {
+    assert_eq!(Mf::Tri(0.0, 0.0, 1.0).eval(0.0), 1.0, "half triangle peaks at its edge");
+    assert_eq!(Mf::Tri(0.0, 1.0, 2.0).eval(0.5), 0.5);
+    assert_eq!(Mf::Trap(0.0, 1.0, 2.0, 4.0).eval(3.0), 0.5);
+    assert_eq!(Mf::Trap(0.0, 1.0, 2.0, 4.0).eval(1.5), 1.0);
+    assert!((Mf::Gauss(0.5, 1.0).eval(1.5) - (-0.5f64).exp()).abs() < 1e-15);
+    assert_eq!(Mf::Bell(2.0, 3.0, 1.0).eval(3.0), 0.5);
+}
+
+#[test]
+fn sugeno_is_a_weighted_average() {
+    // x = 0.25 on two triangles N = trimf(0,0,1), P = trimf(0,1,1): weights
+    // 0.75 and 0.25, outputs −1 and 3: y = (−0.75 + 0.75)/1 = 0.
+    let input = Variable { name: "x".into(), lo: 0.0, hi: 1.0, terms: uniform_triangles(0.0, 1.0, &["N", "P"]) };
+    let output = Variable {
+        name: "y".into(),
+        lo: -1.0,
+        hi: 3.0,
+        terms: vec![("lo".into(), Mf::Const(-1.0)), ("hi".into(), Mf::Const(3.0))],
+    };
+    let rules = vec![
+        Rule { antecedents: vec![(0, 0, false)], connective: Connective::And, consequents: vec![(0, 0)] },
+        Rule { antecedents: vec![(0, 1, false)], connective: Connective::And, consequents: vec![(0, 1)] },
+    ];
+    let mut fis = Fis::new(vec![input], vec![output], rules, Methods::default(), true);
+    let mut y = [f64::NAN];
+    fis.eval(&[0.25], &mut y);
+    assert!(y[0].abs() < 1e-15);
+    fis.eval(&[1.0], &mut y);
+    assert_eq!(y[0], 3.0);
+}
