@@ -7,7 +7,7 @@ use plotters::prelude::*;
 
 /// At most this many points per series reach the SVG; longer series are
 /// reduced to per-bucket minima and maxima so peaks survive.
-const MAX_POINTS: usize = 4000;
+const MAX_POINTS: usize = 2000;
 const PANEL_HEIGHT: u32 = 220;
 const WIDTH: u32 = 1000;
 
@@ -64,14 +64,22 @@ pub fn render_svg(trace: &Trace, title: &str) -> Result<String, String> {
     Ok(svg)
 }
 
-/// Columns grouped by recorded name (`x[1]`, `x[2]` share the panel `x`).
+/// Columns grouped into panels: elements of a vector (`x[1]`, `x[2]`)
+/// share the panel `x`, and names with a common stem before `_`
+/// (`y_fladrc`, `y_fpid`) share the panel `y` — that is how comparisons are
+/// recorded.
 fn groups(trace: &Trace) -> Vec<(String, Vec<usize>)> {
+    let base = |h: &str| h.split('[').next().unwrap_or(h).to_string();
+    let stem = |b: &str| b.split_once('_').map(|(s, _)| s.to_string());
+    let bases: Vec<String> = trace.headers.iter().skip(1).map(|h| base(h)).collect();
     let mut out: Vec<(String, Vec<usize>)> = Vec::new();
-    for (i, h) in trace.headers.iter().enumerate().skip(1) {
-        let base = h.split('[').next().unwrap_or(h).to_string();
-        match out.iter_mut().find(|(b, _)| *b == base) {
-            Some((_, cols)) => cols.push(i),
-            None => out.push((base, vec![i])),
+    for (k, b) in bases.iter().enumerate() {
+        let shared =
+            stem(b).filter(|s| bases.iter().filter(|o| *o != b && stem(o).as_deref() == Some(s.as_str())).count() > 0);
+        let panel = shared.unwrap_or_else(|| b.clone());
+        match out.iter_mut().find(|(p, _)| *p == panel) {
+            Some((_, cols)) => cols.push(k + 1),
+            None => out.push((panel, vec![k + 1])),
         }
     }
     out
@@ -87,8 +95,32 @@ fn y_range(trace: &Trace, cols: &[usize]) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// Min/max per bucket, in time order, for long series.
+/// Min/max per bucket, in time order, for long series; then points that
+/// stay within a thousandth of the series' range of the last point kept
+/// are dropped (plateaus and held discrete signals become single segments,
+/// and the SVG has no pile-ups of points on one pixel).
 fn reduce(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
+    let points = bucket_extremes(t, y);
+    let (lo, hi) = points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| (lo.min(p.1), hi.max(p.1)));
+    let tol = if hi > lo { 1e-3 * (hi - lo) } else { 0.0 };
+    let mut out: Vec<(f64, f64)> = Vec::with_capacity(points.len());
+    for (i, &p) in points.iter().enumerate() {
+        let last = out.last().map_or(f64::NAN, |q: &(f64, f64)| q.1);
+        let next = points.get(i + 1).map_or(f64::NAN, |q| q.1);
+        let flat = (p.1 - last).abs() <= tol && (next - last).abs() <= tol;
+        if !flat {
+            out.push(p);
+        }
+    }
+    if let Some(&end) = points.last() {
+        if out.last() != Some(&end) {
+            out.push(end);
+        }
+    }
+    out
+}
+
+fn bucket_extremes(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
     if y.len() <= MAX_POINTS {
         return t.iter().copied().zip(y.iter().copied()).collect();
     }
@@ -119,6 +151,14 @@ mod tests {
     use super::*;
 
     #[test]
+    fn comparisons_share_a_panel() {
+        let headers = ["t", "r", "y_a", "y_b", "v[1]", "v[2]", "d_x"].map(String::from).to_vec();
+        let g = groups(&Trace::new(headers));
+        let names: Vec<(&str, usize)> = g.iter().map(|(n, c)| (n.as_str(), c.len())).collect();
+        assert_eq!(names, [("r", 1), ("y", 2), ("v", 2), ("d_x", 1)]);
+    }
+
+    #[test]
     fn reduction_keeps_extremes() {
         let t: Vec<f64> = (0..100_000).map(|i| i as f64).collect();
         let mut y = vec![0.0; t.len()];
@@ -127,6 +167,7 @@ mod tests {
         let r = reduce(&t, &y);
         assert!(r.len() <= MAX_POINTS + 2);
         assert!(r.contains(&(54_321.0, 9.0)) && r.contains(&(77_777.0, -4.0)));
+        assert!(r.len() < 12, "plateaus keep only their ends: {}", r.len());
         assert!(r.windows(2).all(|w| w[0].0 <= w[1].0));
     }
 }
