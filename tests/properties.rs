@@ -165,3 +165,55 @@ fn strategies_produce_what_they_promise() {
         assert_eq!(den[0], 1.0);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    #[test]
+    fn td_reaches_a_constant_reference_without_overshoot(r in -5.0..5.0f64, delta in 1.0e2..1.0e5f64,
+            h in 1.0e-4..1.0e-2f64, k in 1.0..10.0f64, fhan in any::<bool>()) {
+        prop_assume!(r.abs() > 1e-3);
+        // Region: δ > 0, h0 = k·h >= h. Time-optimal reach ~2·sqrt(|r|/δ).
+        let form = if fhan { "fhan" } else { "fst" };
+        let params = format!("delta: {delta:e}, h0: {:e}, sample_time: {h:e}, form: {form}", k * h);
+        let stop = 6.0 * (r.abs() / delta).sqrt() + 400.0 * k * h;
+        let trace = run("tracking_differentiator", &params, &[&Signal::constant(r)], stop);
+        let (r1, r2) = (trace.column("r1").unwrap(), trace.column("r2").unwrap());
+        for v in r1 {
+            prop_assert!(v * r.signum() <= r.abs() * (1.0 + 1e-9), "overshoot: {v} past {r}");
+        }
+        prop_assert!((r1.last().unwrap() - r).abs() <= 1e-6 * r.abs().max(1.0), "r1 ends at {}", r1.last().unwrap());
+        prop_assert!(r2.last().unwrap().abs() <= 1e-3 * (delta * r.abs()).sqrt(), "r2 ends at {}", r2.last().unwrap());
+    }
+
+    #[test]
+    fn leso_tracks_a_slowly_varying_disturbance(w0 in 200.0..2000.0f64, amp in 0.1..10.0f64,
+            freq in 0.1..5.0f64, b0 in 0.5..5.0f64, discrete in any::<bool>()) {
+        // Double integrator y'' = f(t) + b0·u with f = amp·sin(2π·freq·t) and a
+        // bounded input u. Region: ω0 > 0 (continuous), ω0·h < 2 (discrete,
+        // here h = 1e-4). For a disturbance of slope at most s = 2π·freq·amp
+        // the z3 error settles below 3s/ω0 (plus a transient of e^{-ω0 t}).
+        let st = if discrete { ", sample_time: 1.0e-4" } else { "" };
+        let yaml = format!(
+            "simulation: {{ stop: 1.0, solver: {{ method: rk4, step: 1.0e-4 }} }}\n\
+             blocks:\n  f: {{ type: sine, amplitude: {amp:e}, frequency: {freq:e} }}\n\
+             \x20 u: {{ type: sine, amplitude: 0.5, frequency: 3 }}\n  bu: {{ type: gain, k: {b0:e} }}\n\
+             \x20 acc: {{ type: sum }}\n  v: {{ type: integrator }}\n  y: {{ type: integrator }}\n\
+             \x20 leso: {{ type: leso, omega: {w0:e}, b0: {b0:e}{st} }}\n  z: {{ type: demux, outputs: 3 }}\n\
+             wires: [f -> acc.u1, u -> bu, bu -> acc.u2, acc -> v, v -> y, y -> leso.y, u -> leso.u, leso -> z]\n\
+             record: [f, y, z1: z.y1, z3: z.y3]\n");
+        let model = ctlgraph::compile_str(&yaml, "leso.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
+        let trace = ctlgraph::simulate(model, None).unwrap();
+        let slope = 2.0 * std::f64::consts::PI * freq * amp;
+        let bound = 3.0 * slope / w0 * 1.5 + 1e-3 * amp;
+        for (k, &t) in trace.t().iter().enumerate() {
+            if t < 30.0 / w0 {
+                continue;
+            }
+            let (f, z3) = (trace.column("f").unwrap()[k], trace.column("z3").unwrap()[k]);
+            prop_assert!((f - z3).abs() <= bound, "t = {t}: f = {f}, z3 = {z3}, bound {bound}");
+            let (y, z1) = (trace.column("y").unwrap()[k], trace.column("z1").unwrap()[k]);
+            prop_assert!((y - z1).abs() <= bound / w0 + 1e-9, "t = {t}: y = {y}, z1 = {z1}");
+        }
+    }
+}
