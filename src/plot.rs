@@ -112,10 +112,8 @@ fn reduce(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
             out.push(p);
         }
     }
-    if let Some(&end) = points.last() {
-        if out.last() != Some(&end) {
-            out.push(end);
-        }
+    if let Some(&end) = points.last().filter(|&&end| out.last() != Some(&end)) {
+        out.push(end);
     }
     out
 }
