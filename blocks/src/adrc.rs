@@ -21,12 +21,12 @@ pub const TYPES: &[BlockType] = &[
               (the two agree for h0 = h). `form: fhan`: Han's later fhan(x1, x2, δ, h0), exact for the \
               discrete double integrator. δ is the largest acceleration of r1 (speed factor); h0 >= h \
               filters noise on r (filter factor). Outputs are the states: no direct feedthrough.\n\
-              Stable region: δ > 0, h0 >= h; then r1 reaches a constant r without overshoot and r2 → 0.",
+              Stable region: δ > 0, h0 >= 2h; then r1 reaches a constant r without overshoot and r2 → 0 (with h0 = h both forms can overshoot by a few percent).",
         inputs: &[PortDoc { name: "r", doc: "reference (scalar)" }],
         outputs: &[PortDoc { name: "r1", doc: "tracked reference" }, PortDoc { name: "r2", doc: "its derivative" }],
         params: &[
             param("delta", None, "speed factor δ > 0: largest |dr2/dt| [units/s²]"),
-            param("h0", Some("sample_time"), "filter factor h0 > 0 [s], usually a few sample times"),
+            param("h0", Some("2·sample_time"), "filter factor h0 > 0 [s]; >= 2·sample_time avoids overshoot"),
             param("form", Some("fst"), "fst (the paper's eq. 7) | fhan (Han's later form)"),
             param("initial", Some("0"), "r1(0)"),
             crate::SAMPLE_TIME_REQUIRED,
@@ -169,7 +169,7 @@ fn build_td(p: &mut Params) -> Result<Built, Diagnostic> {
     let delta = p.number_where("delta", None, |v| v > 0.0 && v.is_finite(), "a positive speed factor")?;
     let st = p.discrete_sample_time()?;
     let h = period(st);
-    let h0 = p.number_where("h0", Some(h), |v| v > 0.0 && v.is_finite(), "a positive filter factor")?;
+    let h0 = p.number_where("h0", Some(2.0 * h), |v| v > 0.0 && v.is_finite(), "a positive filter factor")?;
     let fhan = p.choice("form", &["fst", "fhan"])? == "fhan";
     let initial = p.number_or("initial", 0.0)?;
     let iface = Interface::new(st)
@@ -330,20 +330,12 @@ fn build_lsef(p: &mut Params) -> Result<Built, Diagnostic> {
     }
     let z_port = iface.inputs.len();
     iface = iface.input("z", Width::Fixed(order + 1), true);
-    let mut alpha_ports = [None; 2];
-    for name in p.strings("gain_inputs")? {
-        let names = ["alpha1", "alpha2"];
-        let Some(i) = names[..order].iter().position(|g| *g == name) else {
-            return Err(p
-                .error("gain_inputs", format!("`{name}` is not a gain here: use {}", names[..order].join(", ")))
-                .suggest(name, names[..order].iter().copied()));
-        };
-        if alpha_ports[i].is_some() {
-            return Err(p.error("gain_inputs", format!("`{name}` is listed twice")));
-        }
-        alpha_ports[i] = Some(iface.inputs.len());
-        iface = iface.input(name, Width::Fixed(1), true);
-    }
+    let alpha_ports = if order == 2 {
+        crate::gain_inputs(p, ["alpha1", "alpha2"], &mut iface)?
+    } else {
+        let [a1] = crate::gain_inputs(p, ["alpha1"], &mut iface)?;
+        [a1, None]
+    };
     let alpha = [alpha[0], alpha.get(1).copied().unwrap_or(0.0)];
     let block = Lsef { alpha, alpha_ports, b0, order, z_port, lower, upper };
     Ok(Built::new(block, iface.output("u", Width::Fixed(1))))

@@ -42,6 +42,35 @@ pub fn registry() -> Registry {
     reg
 }
 
+/// The `gain_inputs` parameter: gains (out of `names`) that come from
+/// input ports. Adds one scalar port per listed gain to `iface`, in the
+/// order listed, and returns each name's port index (`None`: the
+/// parameter's value is used).
+pub(crate) fn gain_inputs<const N: usize>(
+    p: &mut ctlgraph_core::Params,
+    names: [&'static str; N],
+    iface: &mut ctlgraph_core::Interface,
+) -> Result<[Option<usize>; N], ctlgraph_core::Diagnostic> {
+    let mut ports = [None; N];
+    for name in p.strings("gain_inputs")? {
+        let Some(i) = names.iter().position(|g| *g == name) else {
+            return Err(p
+                .error("gain_inputs", format!("`{name}` is not a gain here: use {}", names.join(", ")))
+                .suggest(name, names));
+        };
+        if ports[i].is_some() {
+            return Err(p.error("gain_inputs", format!("`{name}` is listed twice")));
+        }
+        ports[i] = Some(iface.inputs.len());
+        iface.inputs.push(ctlgraph_core::block::InputPort {
+            name: name.to_string(),
+            width: ctlgraph_core::Width::Fixed(1),
+            feedthrough: true,
+        });
+    }
+    Ok(ports)
+}
+
 /// Shorthand for parameter documentation tables.
 pub(crate) const fn param(name: &'static str, default: Option<&'static str>, doc: &'static str) -> ParamDoc {
     ParamDoc { name, default, doc }

@@ -14,7 +14,7 @@ pub const TYPES: &[BlockType] = &[BlockType {
           \x20 I' = ki·e (+ anti-windup),  D = kd·N·(e − x_f),  x_f' = N·(e − x_f),\n\
           i.e. C(s) = kp + ki/s + kd·N·s/(s + N). The integrator holds ∫ki·e (not ∫e), so changing ki \
           through its port does not make the output jump. Anti-windup while the output is limited: \
-          `clamping` stops integrating when ki·e would drive the output further into the limit; \
+          `clamping` stops integrating when ki·e would drive the output further into the limit (decided at each major step and held through the solver's stages, so an adaptive solver does not chatter on the limit); \
           `back_calculation` adds kb·(u − v) to I' (v the unlimited output); `none` does neither.\n\
           Discrete (sample_time T > 0): I(k+1) = I(k) + T·(ki·e(k) + anti-windup) (forward Euler, \
           Simulink's default), and the filter by backward Euler, x_f(k) = (x_f(k−1) + N·T·e(k))/(1 + N·T), \
@@ -85,10 +85,15 @@ impl PidLaw {
     }
 }
 
-/// Continuous PID: states [I, x_f] integrated by the solver.
+/// Continuous PID: states [I, x_f] integrated by the solver. The clamping
+/// decision is taken at major steps and held through the solver's stages:
+/// decided per stage, it makes the right-hand side switch with the state,
+/// and an adaptive solver chatters on the limit with ever smaller steps.
 struct ContinuousPid {
     law: PidLaw,
     initial: f64,
+    /// Integration stopped by clamping anti-windup (decided at major steps).
+    holding: bool,
 }
 
 impl ContinuousPid {
@@ -108,14 +113,24 @@ impl Block for ContinuousPid {
     fn initialize(&mut self, x0: &mut [f64]) {
         x0[0] = self.initial;
         x0[1] = 0.0;
+        self.holding = false;
     }
     fn output(&mut self, io: &mut Io) {
         let (_, u, _) = self.eval(io);
         io.set(0, u);
     }
+    fn update(&mut self, io: &mut Io) {
+        let (v, u, ki_e) = self.eval(io);
+        self.holding =
+            self.law.anti_windup == AntiWindup::Clamping && self.law.integrand(ki_e, v, u) == 0.0 && ki_e != 0.0;
+    }
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
         let (v, u, ki_e) = self.eval(io);
-        dx[0] = self.law.integrand(ki_e, v, u);
+        dx[0] = match self.law.anti_windup {
+            AntiWindup::Clamping if self.holding => 0.0,
+            AntiWindup::Clamping => ki_e,
+            _ => self.law.integrand(ki_e, v, u),
+        };
         dx[1] = self.law.n * (io.u(0) - io.x[1]);
     }
 }
@@ -168,32 +183,16 @@ fn build_pid(p: &mut Params) -> Result<Built, Diagnostic> {
         _ => AntiWindup::Clamping,
     };
     let initial = p.number_or("initial", 0.0)?;
-    let mut gain_ports = [None; 3];
-    let mut iface_ports = vec!["e"];
-    for name in p.strings("gain_inputs")? {
-        let Some(i) = ["kp", "ki", "kd"].iter().position(|g| *g == name) else {
-            return Err(p
-                .error("gain_inputs", format!("`{name}` is not a gain: use kp, ki, kd"))
-                .suggest(name, ["kp", "ki", "kd"]));
-        };
-        if gain_ports[i].is_some() {
-            return Err(p.error("gain_inputs", format!("`{name}` is listed twice")));
-        }
-        gain_ports[i] = Some(iface_ports.len());
-        iface_ports.push(name);
-    }
-    let law = PidLaw { kp, ki, kd, n, lower, upper, anti_windup, gain_ports };
     let st = p.sample_time(SampleTime::Continuous)?;
-    let mut iface = Interface::new(st);
-    for name in iface_ports {
-        iface = iface.input(name, Width::Fixed(1), true);
-    }
+    let mut iface = Interface::new(st).input("e", Width::Fixed(1), true);
+    let gain_ports = crate::gain_inputs(p, ["kp", "ki", "kd"], &mut iface)?;
+    let law = PidLaw { kp, ki, kd, n, lower, upper, anti_windup, gain_ports };
     let iface = iface.output("u", Width::Fixed(1));
     match st {
         SampleTime::Discrete { period, .. } => {
             Ok(Built::new(DiscretePid { law, period, initial, integral: initial, filter: 0.0 }, iface))
         }
-        SampleTime::Continuous => Ok(Built::new(ContinuousPid { law, initial }, iface)),
+        SampleTime::Continuous => Ok(Built::new(ContinuousPid { law, initial, holding: false }, iface)),
         other => Err(p.error("sample_time", format!("a PID is continuous (0) or discrete (T > 0), not {other}"))),
     }
 }
