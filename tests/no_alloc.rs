@@ -1,6 +1,7 @@
 //! The step loop allocates nothing: a counting global allocator watches a
-//! compiled graph with a transfer function, a PID and discrete blocks step
-//! thousands of times, recorder included.
+//! compiled graph with a transfer function, PIDs, discrete blocks, noise,
+//! the ADRC blocks and a fuzzy system step thousands of times, recorder
+//! included.
 
 use ctlgraph::record::Recorder;
 use ctlgraph_core::Simulator;
@@ -53,9 +54,24 @@ blocks:
   f:     { type: fcn, inputs: 2, expr: \"u1 + 0.1*sin(u2)\" }
   sat:   { type: saturation, lower: -2, upper: 2 }
   rl:    { type: rate_limiter, rising: 50, falling: -50 }
+  noise: { type: band_limited_white_noise, power: 1.0e-6, sample_time: 1.0e-3, active: [0.2, 0.8] }
+  td:    { type: tracking_differentiator, delta: 100, sample_time: 1.0e-3 }
+  leso:  { type: leso, omega: 200, b0: 100, sample_time: 1.0e-3 }
+  lsef:  { type: lsef, alpha: [1, 0.1], b0: 100, gain_inputs: [alpha1] }
+  z:     { type: demux, outputs: 3 }
+  tune:
+    type: fuzzy
+    inputs: { a: { range: [-1, 1], terms: 7 }, b: { range: [-1, 1], terms: 3 } }
+    outputs: { k: { range: [-0.2, 0.2], terms: 5 } }
+    rules:
+      - if a is NB and b is N then k is NB
+      - if a is ZO or b is Z then k is ZO
+      - if a is PB and b is not N then k is PB
+  k1:    { type: fcn, expr: \"1 + u\" }
 wires: [r -> e.u1, plant -> e.u2, e -> pid, pid -> f.u1, plant -> f.u2, f -> sat, sat -> rl, rl -> plant,
-        e -> dpid, plant -> delay, delay -> dtf]
-record: [r, y: plant, u: pid, dpid, dtf]
+        e -> dpid, plant -> delay, delay -> dtf, r -> td, td.r1 -> lsef.r1, td.r2 -> lsef.r2, plant -> leso.y,
+        lsef -> leso.u, leso -> lsef.z, leso -> z, z.y1 -> tune.a, noise -> tune.b, tune -> k1, k1 -> lsef.alpha1]
+record: [r, y: plant, u: pid, dpid, dtf, lsef, tune]
 ";
 
 fn allocations_while_stepping(solver: &str, steps: usize) -> usize {
