@@ -350,7 +350,7 @@ impl Parser<'_> {
         self.peek().map_or(self.len, |t| t.offset)
     }
 
-    fn expect(&mut self, sym: char) -> Result<(), ExprError> {
+    fn require(&mut self, sym: char) -> Result<(), ExprError> {
         if self.eat(sym) {
             return Ok(());
         }
@@ -413,7 +413,7 @@ impl Parser<'_> {
             TokKind::Sym('(') => {
                 self.at += 1;
                 let inner = self.expr()?;
-                self.expect(')')?;
+                self.require(')')?;
                 Ok(inner)
             }
             TokKind::Name(name) => {
@@ -448,7 +448,7 @@ impl Parser<'_> {
         while self.eat(',') {
             args.push(self.expr()?);
         }
-        self.expect(')')?;
+        self.require(')')?;
         let n = args.len();
         let arity_error =
             |want: &str| ExprError { offset, message: format!("`{name}` takes {want}, got {n}"), hint: None };
@@ -500,7 +500,7 @@ impl Parser<'_> {
         while self.eat(',') {
             args.push(Expr { root: fold(self.expr()?) });
         }
-        self.expect(')')?;
+        self.require(')')?;
         let slot = self.scope.signal_call(function, signal, args).map_err(|message| ExprError {
             offset,
             message,
