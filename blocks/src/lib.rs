@@ -8,12 +8,15 @@ use ctlgraph_core::registry::{ParamDoc, PortDoc, Registry};
 pub mod adrc;
 pub mod continuous;
 pub mod discrete;
+pub mod estimation;
+pub mod force;
 pub mod fuzzy;
 pub mod math;
 pub mod noise;
 pub mod nonlinear;
 pub mod pid;
 pub mod routing;
+pub mod smc;
 pub mod sources;
 pub mod tables;
 #[cfg(feature = "testing")]
@@ -33,6 +36,9 @@ pub fn registry() -> Registry {
         pid::TYPES,
         adrc::TYPES,
         fuzzy::TYPES,
+        force::TYPES,
+        smc::TYPES,
+        estimation::TYPES,
         routing::TYPES,
     ] {
         for ty in family {

@@ -153,7 +153,7 @@ fn build_from_csv(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// Reads two columns by header name; errors name the file, row and column.
-fn read_columns(path: &std::path::Path, time: &str, column: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
+pub(crate) fn read_columns(path: &std::path::Path, time: &str, column: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
     let shown = path.display();
     let mut reader = csv::Reader::from_path(path).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
     let headers = reader.headers().map_err(|e| format!("`{shown}`: {e}"))?.clone();
