@@ -1,0 +1,62 @@
+//! Reproduces the papers' comparisons: runs the graphs of graphs/fladrc/
+//! and graphs/contact-force/ and prints the metrics tables of
+//! docs/fladrc.md and docs/contact-force.md.
+//!
+//!     cargo run --release --example paper_tables
+
+use ctlgraph::core::checks::metrics::{Metric, evaluate};
+use ctlgraph::record::Trace;
+use std::path::Path;
+
+type Res<T> = Result<T, Box<dyn std::error::Error>>;
+
+fn run(file: &str, sets: &[(&str, String)]) -> Res<Trace> {
+    let sets: Vec<(String, String)> = sets.iter().map(|(n, v)| (n.to_string(), v.clone())).collect();
+    let model = ctlgraph::compile_file(Path::new(file), &sets)?;
+    Ok(ctlgraph::simulate(model, None)?)
+}
+
+fn col<'a>(trace: &'a Trace, name: &str) -> Res<&'a [f64]> {
+    Ok(trace.column(name).ok_or_else(|| format!("no column {name}"))?)
+}
+
+fn fladrc() -> Res<()> {
+    println!("FLADRC (docs/fladrc.md)\n");
+    println!("| controller | settling time, 2 % [s] | overshoot [%] | peak \\|e\\| in [0.6, 1.2) [mm] | recovery after 0.6 s, 2 % [s] | peak \\|e\\| in [1.2, 2] [mm] | IAE [mm·s] |");
+    println!("|---|---|---|---|---|---|---|");
+    for (label, file) in [("FLADRC", "fladrc"), ("LADRC", "ladrc"), ("FPID", "fpid"), ("PID", "pid")] {
+        let trace = run(&format!("graphs/fladrc/{file}.yaml"), &[])?;
+        let (t, y, e) = (trace.t(), col(&trace, "y")?, col(&trace, "e")?);
+        let settle = evaluate(Metric::SettlingTime, t, y, &[1.0, 0.02, 0.0, 0.6]);
+        let overshoot = evaluate(Metric::Overshoot, t, y, &[1.0, 0.0, 0.6]);
+        let peak_step = evaluate(Metric::MaxAbs, t, e, &[0.6, 1.2]);
+        // Recovery: time after 0.6 s until |e| stays within 0.02 mm (2 % of the depth).
+        let recovery = evaluate(Metric::SettlingTime, t, e, &[0.0, 0.02, 0.6, 1.2]);
+        let peak_noise = evaluate(Metric::MaxAbs, t, e, &[1.2, 2.0]);
+        let iae = evaluate(Metric::Iae, t, e, &[]);
+        println!("| {label} | {settle:.4} | {overshoot:.2} | {peak_step:.4} | {recovery:.4} | {peak_noise:.4} | {iae:.4} |");
+    }
+    Ok(())
+}
+
+fn contact_force() -> Res<()> {
+    println!("\nContact force (docs/contact-force.md), from 1 s on\n");
+    println!("| k_e [N/mm] | inner loop | max \\|ef\\| [N] | RMS ef [N] | fn range [N] |");
+    println!("|---|---|---|---|---|");
+    for k_e in [20, 50, 100, 200, 500] {
+        for kind in ["smc", "pid"] {
+            let trace = run(&format!("graphs/contact-force/impedance_{kind}.yaml"), &[("k_e", k_e.to_string())])?;
+            let (t, ef, fn_) = (trace.t(), col(&trace, "ef")?, col(&trace, "fn")?);
+            let w = [1.0, 10.0];
+            let (max_ef, rms_ef) = (evaluate(Metric::MaxAbs, t, ef, &w), evaluate(Metric::Rms, t, ef, &w));
+            let (lo, hi) = (evaluate(Metric::Min, t, fn_, &w), evaluate(Metric::Max, t, fn_, &w));
+            println!("| {k_e} | {} | {max_ef:.2} | {rms_ef:.2} | {lo:.1} – {hi:.1} |", kind.to_uppercase());
+        }
+    }
+    Ok(())
+}
+
+fn main() -> Res<()> {
+    fladrc()?;
+    contact_force()
+}
