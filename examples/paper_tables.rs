@@ -22,7 +22,9 @@ fn col<'a>(trace: &'a Trace, name: &str) -> Res<&'a [f64]> {
 
 fn fladrc() -> Res<()> {
     println!("FLADRC (docs/fladrc.md)\n");
-    println!("| controller | settling time, 2 % [s] | overshoot [%] | peak \\|e\\| in [0.6, 1.2) [mm] | recovery after 0.6 s, 2 % [s] | peak \\|e\\| in [1.2, 2] [mm] | IAE [mm·s] |");
+    println!(
+        "| controller | settling time, 2 % [s] | overshoot [%] | peak \\|e\\| in [0.6, 1.2) [mm] | recovery after 0.6 s, 2 % [s] | peak \\|e\\| in [1.2, 2] [mm] | IAE [mm·s] |"
+    );
     println!("|---|---|---|---|---|---|---|");
     for (label, file) in [("FLADRC", "fladrc"), ("LADRC", "ladrc"), ("FPID", "fpid"), ("PID", "pid")] {
         let trace = run(&format!("graphs/fladrc/{file}.yaml"), &[])?;
@@ -34,7 +36,9 @@ fn fladrc() -> Res<()> {
         let recovery = evaluate(Metric::SettlingTime, t, e, &[0.0, 0.02, 0.6, 1.2]);
         let peak_noise = evaluate(Metric::MaxAbs, t, e, &[1.2, 2.0]);
         let iae = evaluate(Metric::Iae, t, e, &[]);
-        println!("| {label} | {settle:.4} | {overshoot:.2} | {peak_step:.4} | {recovery:.4} | {peak_noise:.4} | {iae:.4} |");
+        println!(
+            "| {label} | {settle:.4} | {overshoot:.2} | {peak_step:.4} | {recovery:.4} | {peak_noise:.4} | {iae:.4} |"
+        );
     }
     Ok(())
 }

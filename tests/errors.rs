@@ -143,6 +143,7 @@ fn structural_mistakes() {
     check("simulation: { solver: rk4 }\n", 1, 23, "the fixed-step method `rk4` needs a `step`", None);
     check("simulation: { stop: -1 }\n", 1, 21, "must be a positive number", None);
     check("blocks:\n  u: { type: step }\nrecord: [u, u]\n", 3, 13, "`u` is recorded twice", None);
+    check("blocks:\n  u: { type: step }\nrecord: [t: u]\n", 3, 13, "`t` is the time column", Some("rename it"));
     check(
         "blocks:\n  u: { type: step }\nrecord: [v]\n",
         3,

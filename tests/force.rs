@@ -71,3 +71,72 @@ proptest! {
         prop_assert!(s_end < 0.2, "|S| at the end {s_end}");
     }
 }
+
+#[test]
+fn boundary_layer_smc_saturates_outside_and_is_linear_inside() {
+    // S = 2e + e' with e = t − 0.5, e' = 1: S = 2t; φ = 0.5: u = k·sat(S/φ).
+    let yaml = "simulation: { stop: 1.0, solver: { method: rk4, step: 0.01 } }\n\
+                blocks:\n  e: { type: ramp, initial: -0.5 }\n  de: { type: constant, value: 1 }\n\
+                \x20 layer: { type: smc, lambda: 2, k: 3, phi: 0.5 }\n  bang: { type: smc, lambda: 2, k: 3 }\n\
+                wires: [e -> layer.e, de -> layer.de, e -> bang.e, de -> bang.de]\n\
+                record: [u: layer.u, s: layer.s, sign: bang.u]\n";
+    let trace = common::run(yaml);
+    assert!(max_error(&trace, "s", |t| 2.0 * t) < 1e-12);
+    assert!(max_error(&trace, "u", |t| 3.0 * (2.0 * t / 0.5).clamp(-1.0, 1.0)) < 1e-12);
+    assert!(max_error(&trace, "sign", |t| if t > 0.0 { 3.0 } else { 0.0 }) < 1e-12);
+}
+
+#[test]
+fn contact_profiles_from_tables_and_csv_agree_with_the_expression() {
+    let dir = tempfile::tempdir().unwrap();
+    let xs: Vec<f64> = (0..=100).map(|i| i as f64).collect();
+    let mut csv = String::from("x,z\n");
+    for &x in &xs {
+        csv.push_str(&format!("{x},{}\n", 0.2 * x));
+    }
+    std::fs::write(dir.path().join("surface.csv"), csv).unwrap();
+    let graph = dir.path().join("g.yaml");
+    std::fs::write(
+        &graph,
+        "simulation: { stop: 1.0, solver: { method: rk4, step: 0.01 } }\n\
+         blocks:\n  x: { type: ramp, slope: 50 }\n  z: { type: constant, value: 3 }\n  v: { type: constant, value: 0 }\n\
+         \x20 by_expr: { type: contact, profile: \"0.2*x\", stiffness: 10 }\n\
+         \x20 by_table: { type: contact, profile_x: [0, 100], profile_z: [0, 20], stiffness: 10 }\n\
+         \x20 by_csv: { type: contact, profile_file: surface.csv, stiffness: 10 }\n\
+         wires: [x -> by_expr.x, x -> by_table.x, x -> by_csv.x, z -> by_expr.z, z -> by_table.z, z -> by_csv.z,\n\
+         \x20       v -> by_expr.vx, v -> by_table.vx, v -> by_csv.vx, v -> by_expr.vz, v -> by_table.vz, v -> by_csv.vz]\n\
+         record: [e: by_expr.fn, tab: by_table.fn, c: by_csv.fn]\n",
+    )
+    .unwrap();
+    let trace = ctlgraph::simulate(ctlgraph::compile_file(&graph, &[]).unwrap(), None).unwrap();
+    // z = 3 meets the surface at x = 15 (t = 0.3); then N = 10·(0.2x − 3)/sqrt(1.04).
+    let exact = |t: f64| (10.0 * (0.2 * 50.0 * t - 3.0) / 1.04f64.sqrt()).max(0.0);
+    for c in ["e", "tab", "c"] {
+        let err = max_error(&trace, c, exact);
+        assert!(err < 1e-6, "{c}: {err}");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+
+    #[test]
+    fn impedance_step_is_bounded_and_settles_at_one_over_k(m in 0.01..2.0f64, b in 0.1..50.0f64, k in 0.5..50.0f64,
+            form in prop::sample::select(vec!["continuous", "bilinear", "backward_euler"])) {
+        // Region: m, b, k > 0. A second-order step response never passes
+        // twice its final value 1/k and settles there.
+        let st = match form {
+            "continuous" => String::new(),
+            method => format!(", method: {method}, sample_time: 1.0e-3"),
+        };
+        let stop = 20.0 * (m / b).max(b / k);
+        let yaml = format!(
+            "simulation: {{ stop: {stop:e}, solver: {{ method: dopri5, rtol: 1.0e-8, atol: 1.0e-12 }} }}\n\
+             blocks:\n  e: {{ type: step }}\n  imp: {{ type: impedance, m: {m:e}, b: {b:e}, k: {k:e}{st} }}\n\
+             wires: [e -> imp]\nrecord: [imp]\n");
+        let trace = common::run(&yaml);
+        let x = trace.column("imp").unwrap();
+        prop_assert!(x.iter().all(|v| v.is_finite() && v.abs() <= 2.0 / k * (1.0 + 1e-6)));
+        prop_assert!((x.last().unwrap() - 1.0 / k).abs() <= 1e-3 / k, "ends at {} vs {}", x.last().unwrap(), 1.0 / k);
+    }
+}

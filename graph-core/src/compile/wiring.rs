@@ -209,6 +209,13 @@ pub(super) fn record_columns(
 ) -> Result<Vec<Column>, Diagnostic> {
     let mut columns: Vec<Column> = Vec::new();
     let mut push = |name: String, port: Port, pos: Option<&Pos>| -> Result<(), Diagnostic> {
+        if name == "t" {
+            let message = "`t` is the time column: record this signal under another name".to_string();
+            return Err(match pos {
+                Some(p) => Diagnostic::at(p, message).with_hint("rename it: `name: block.port`"),
+                None => Diagnostic::plain(message),
+            });
+        }
         if columns.iter().any(|c| c.name == name) {
             let message = format!("`{name}` is recorded twice");
             return Err(match pos {
