@@ -2,6 +2,7 @@
 //! the linear extended state observer (LESO) and linear state error
 //! feedback (LSEF). Composed into LADRC by `graphs/lib/ladrc.yaml`.
 
+use crate::math::sign;
 use crate::param;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
@@ -90,10 +91,6 @@ pub const TYPES: &[BlockType] = &[
     },
 ];
 
-fn sign(v: f64) -> f64 {
-    crate::math::sign(v)
-}
-
 /// Han's time-optimal synthesis function fst(x1, x2, δ, h0) with
 /// c = x1 + h0·x2 (see the block doc).
 pub fn fst(x1: f64, x2: f64, delta: f64, h0: f64) -> f64 {
@@ -158,17 +155,10 @@ impl Block for TrackingDifferentiator {
     }
 }
 
-fn period(st: SampleTime) -> f64 {
-    match st {
-        SampleTime::Discrete { period, .. } => period,
-        _ => 0.0,
-    }
-}
-
 fn build_td(p: &mut Params) -> Result<Built, Diagnostic> {
     let delta = p.number_where("delta", None, |v| v > 0.0 && v.is_finite(), "a positive speed factor")?;
     let st = p.discrete_sample_time()?;
-    let h = period(st);
+    let h = st.period().unwrap_or(0.0);
     let h0 = p.number_where("h0", Some(2.0 * h), |v| v > 0.0 && v.is_finite(), "a positive filter factor")?;
     let fhan = p.choice("form", &["fst", "fhan"])? == "fhan";
     let initial = p.number_or("initial", 0.0)?;
@@ -272,14 +262,8 @@ fn build_leso(p: &mut Params) -> Result<Built, Diagnostic> {
     let b0 = p.number_where("b0", None, |v| v != 0.0 && v.is_finite(), "a nonzero input gain")?;
     let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
     let initial = crate::continuous::initial_vector(&initial, order + 1).map_err(|m| p.error("initial", m))?;
-    let st = p.sample_time(SampleTime::Continuous)?;
-    let h = match st {
-        SampleTime::Continuous => 0.0,
-        SampleTime::Discrete { period, .. } => period,
-        other => {
-            return Err(p.error("sample_time", format!("the LESO is continuous (0) or discrete (h > 0), not {other}")));
-        }
-    };
+    let (st, h) = p.continuous_or_discrete()?;
+    let h = h.unwrap_or(0.0);
     let iface = Interface::new(st)
         .input("y", Width::Fixed(1), false)
         .input("u", Width::Fixed(1), false)

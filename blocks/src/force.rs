@@ -156,10 +156,6 @@ pub const TYPES: &[BlockType] = &[
     },
 ];
 
-fn positive(p: &mut Params, key: &str) -> Result<f64, Diagnostic> {
-    p.number_where(key, None, |v| v > 0.0 && v.is_finite(), "a positive number")
-}
-
 /// m x'' + b x' + k x = e, continuous.
 struct Impedance {
     m: f64,
@@ -193,22 +189,19 @@ pub fn discrete_impedance(m: f64, b: f64, k: f64, t: f64, bilinear: bool) -> (Ve
 }
 
 fn build_impedance(p: &mut Params) -> Result<Built, Diagnostic> {
-    let (m, b, k) = (positive(p, "m")?, positive(p, "b")?, positive(p, "k")?);
+    let (m, b, k) = (p.positive("m")?, p.positive("b")?, p.positive("k")?);
     let bilinear = p.choice("method", &["bilinear", "backward_euler"])? == "bilinear";
-    let st = p.sample_time(SampleTime::Continuous)?;
-    match st {
-        SampleTime::Continuous => {
+    let (st, period) = p.continuous_or_discrete()?;
+    match period {
+        None => {
             let iface = Interface::new(st).input("e", Width::Fixed(1), false).output("x", Width::Fixed(1));
             Ok(Built::new(Impedance { m, b, k }, iface))
         }
-        SampleTime::Discrete { period, .. } => {
+        Some(period) => {
             let (num, den) = discrete_impedance(m, b, k, period, bilinear);
             let ss = tf2ss(&num, &den).map_err(|e| p.error("m", e))?;
             let iface = Interface::new(st).input("e", Width::Fixed(1), true).output("x", Width::Fixed(1));
             Ok(Built::new(DiscreteLti::new(ss), iface))
-        }
-        other => {
-            Err(p.error("sample_time", format!("the impedance is continuous (0) or discrete (T > 0), not {other}")))
         }
     }
 }
@@ -344,7 +337,7 @@ fn build_profile(p: &mut Params) -> Result<Profile, Diagnostic> {
 
 fn build_contact(p: &mut Params) -> Result<Built, Diagnostic> {
     let profile = build_profile(p)?;
-    let stiffness = positive(p, "stiffness")?;
+    let stiffness = p.positive("stiffness")?;
     let damping = p.number_where("damping", Some(0.0), |v| v >= 0.0 && v.is_finite(), "a damping >= 0")?;
     let mu = p.number_where("mu", Some(0.0), |v| (0.0..1.0).contains(&v), "in [0, 1)")?;
     let mut iface = Interface::new(SampleTime::Continuous);
@@ -385,11 +378,11 @@ impl Block for FeedDrive {
 
 fn build_feed_drive(p: &mut Params) -> Result<Built, Diagnostic> {
     let (je, be) = if p.has("je") || p.has("be") {
-        (positive(p, "je")?, positive(p, "be")?)
+        (p.positive("je")?, p.positive("be")?)
     } else {
-        let (ka, kt, rg) = (positive(p, "ka")?, positive(p, "kt")?, positive(p, "rg")?);
+        let (ka, kt, rg) = (p.positive("ka")?, p.positive("kt")?, p.positive("rg")?);
         let scale = ka * kt * rg;
-        (positive(p, "j")? / scale, positive(p, "b")? / scale)
+        (p.positive("j")? / scale, p.positive("b")? / scale)
     };
     let init = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0, 0.0]);
     let [x, v] = init[..] else { return Err(p.error("initial", "expected [x(0), x'(0)]")) };
@@ -436,7 +429,7 @@ impl Block for ReferenceFilter {
 }
 
 fn build_reference_filter(p: &mut Params) -> Result<Built, Diagnostic> {
-    let omega = positive(p, "omega")?;
+    let omega = p.positive("omega")?;
     let zeta = p.number_where("zeta", Some(1.0), |v| v > 0.0 && v.is_finite(), "positive")?;
     let initial = p.number_or("initial", 0.0)?;
     let iface = Interface::new(SampleTime::Continuous)

@@ -6,7 +6,7 @@
 
 use crate::{ACTIVE, Y_SCALAR, param};
 use ctlgraph_core::registry::{BlockType, Built};
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::{Rng, SeedableRng};
 
@@ -144,16 +144,9 @@ fn noise(p: &mut Params, law: Law) -> Result<Built, Diagnostic> {
     crate::sources::windowed(p, Built::new(block, Interface::new(st).output("y", Width::Fixed(1))))
 }
 
-fn period(st: SampleTime) -> f64 {
-    match st {
-        SampleTime::Discrete { period, .. } => period,
-        _ => f64::NAN,
-    }
-}
-
 fn build_band_limited(p: &mut Params) -> Result<Built, Diagnostic> {
     let power = p.number_where("power", Some(0.1), |v| v >= 0.0 && v.is_finite(), "a power >= 0")?;
-    let t = period(p.discrete_sample_time()?);
+    let t = p.discrete_sample_time()?.period().unwrap_or(f64::NAN);
     noise(p, Law::Normal { mean: 0.0, std: (power / t).sqrt() })
 }
 

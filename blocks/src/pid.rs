@@ -4,7 +4,7 @@
 
 use crate::param;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
 pub const TYPES: &[BlockType] = &[BlockType {
     name: "pid",
@@ -183,16 +183,13 @@ fn build_pid(p: &mut Params) -> Result<Built, Diagnostic> {
         _ => AntiWindup::Clamping,
     };
     let initial = p.number_or("initial", 0.0)?;
-    let st = p.sample_time(SampleTime::Continuous)?;
+    let (st, period) = p.continuous_or_discrete()?;
     let mut iface = Interface::new(st).input("e", Width::Fixed(1), true);
     let gain_ports = crate::gain_inputs(p, ["kp", "ki", "kd"], &mut iface)?;
     let law = PidLaw { kp, ki, kd, n, lower, upper, anti_windup, gain_ports };
     let iface = iface.output("u", Width::Fixed(1));
-    match st {
-        SampleTime::Discrete { period, .. } => {
-            Ok(Built::new(DiscretePid { law, period, initial, integral: initial, filter: 0.0 }, iface))
-        }
-        SampleTime::Continuous => Ok(Built::new(ContinuousPid { law, initial, holding: false }, iface)),
-        other => Err(p.error("sample_time", format!("a PID is continuous (0) or discrete (T > 0), not {other}"))),
-    }
+    Ok(match period {
+        Some(period) => Built::new(DiscretePid { law, period, initial, integral: initial, filter: 0.0 }, iface),
+        None => Built::new(ContinuousPid { law, initial, holding: false }, iface),
+    })
 }

@@ -144,24 +144,16 @@ impl Block for SlidingMode {
     }
 }
 
-fn positive(p: &mut Params, key: &str) -> Result<f64, Diagnostic> {
-    p.number_where(key, None, |v| v > 0.0 && v.is_finite(), "a positive number")
-}
-
 fn build_sliding_mode(p: &mut Params) -> Result<Built, Diagnostic> {
-    let (lambda, ks, rho) = (positive(p, "lambda")?, positive(p, "ks")?, positive(p, "rho")?);
-    let (je, be) = (positive(p, "je")?, positive(p, "be")?);
+    let (lambda, ks, rho) = (p.positive("lambda")?, p.positive("ks")?, p.positive("rho")?);
+    let (je, be) = (p.positive("je")?, p.positive("be")?);
     let (d_min, d_max) = (p.number("d_min")?, p.number("d_max")?);
     if d_min.is_nan() || d_max.is_nan() || d_min > d_max {
         return Err(p.error("d_max", format!("`d_max` ({d_max}) must be >= `d_min` ({d_min})")));
     }
     let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
-    let st = p.sample_time(SampleTime::Continuous)?;
-    let period = match st {
-        SampleTime::Continuous => 0.0,
-        SampleTime::Discrete { period, .. } => period,
-        other => return Err(p.error("sample_time", format!("continuous (0) or discrete (T > 0), not {other}"))),
-    };
+    let (st, period) = p.continuous_or_discrete()?;
+    let period = period.unwrap_or(0.0);
     let mut iface = Interface::new(st);
     for name in ["xr", "dxr", "ddxr", "x", "dx"] {
         iface = iface.input(name, Width::Fixed(1), true);
@@ -189,7 +181,7 @@ impl Block for Smc {
 }
 
 fn build_smc(p: &mut Params) -> Result<Built, Diagnostic> {
-    let lambda = positive(p, "lambda")?;
+    let lambda = p.positive("lambda")?;
     let k = p.number_where("k", None, |v| v >= 0.0 && v.is_finite(), "a gain >= 0")?;
     let phi = p.number_where("phi", Some(0.0), |v| v >= 0.0 && v.is_finite(), "a width >= 0")?;
     let equivalent = p.bool_or("equivalent_input", false)?;

@@ -26,6 +26,16 @@ pub enum SampleTime {
     Constant,
 }
 
+impl SampleTime {
+    /// The period of a discrete sample time.
+    pub fn period(&self) -> Option<f64> {
+        match *self {
+            SampleTime::Discrete { period, .. } => Some(period),
+            _ => None,
+        }
+    }
+}
+
 impl fmt::Display for SampleTime {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -176,12 +186,6 @@ impl<'a> Io<'a> {
     #[inline]
     pub fn set_at(&mut self, port: usize, k: usize, value: f64) {
         self.signals[self.outputs[port].offset + k] = value;
-    }
-
-    /// The current value of output `port` (what the block last wrote).
-    #[inline]
-    pub fn y(&self, port: usize) -> f64 {
-        self.signals[self.outputs[port].offset]
     }
 
     pub fn num_outputs(&self) -> usize {

@@ -145,6 +145,24 @@ impl<'a> Params<'a> {
         if ok(v) { Ok(v) } else { Err(self.error(key, format!("must be {requirement}, got {v}"))) }
     }
 
+    /// A required positive, finite number.
+    pub fn positive(&mut self, key: &str) -> Result<f64, Diagnostic> {
+        self.number_where(key, None, |v| v > 0.0 && v.is_finite(), "a positive number")
+    }
+
+    /// The `sample_time` of blocks that exist in a continuous and a
+    /// discrete form (default continuous): the sample time and, when
+    /// discrete, its period.
+    pub fn continuous_or_discrete(&mut self) -> Result<(SampleTime, Option<f64>), Diagnostic> {
+        match self.sample_time(SampleTime::Continuous)? {
+            st @ SampleTime::Continuous => Ok((st, None)),
+            st @ SampleTime::Discrete { period, .. } => Ok((st, Some(period))),
+            other => {
+                Err(self.error("sample_time", format!("this block is continuous (0) or discrete (T > 0), not {other}")))
+            }
+        }
+    }
+
     /// A positive whole number.
     pub fn count_or(&mut self, key: &str, default: usize) -> Result<usize, Diagnostic> {
         let v = self.number_or(key, default as f64)?;

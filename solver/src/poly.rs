@@ -9,17 +9,6 @@ pub fn trim_leading_zeros(p: &[f64]) -> &[f64] {
     &p[first..]
 }
 
-/// Degree of a polynomial (`None` for the zero polynomial).
-pub fn degree(p: &[f64]) -> Option<usize> {
-    let p = trim_leading_zeros(p);
-    (!p.is_empty()).then(|| p.len() - 1)
-}
-
-/// Evaluates the polynomial at `x` (Horner).
-pub fn eval(p: &[f64], x: f64) -> f64 {
-    p.iter().fold(0.0, |acc, &c| acc * x + c)
-}
-
 /// The monic real polynomial with the given roots. Complex roots must come
 /// in conjugate pairs; the imaginary residue is checked, not silently dropped.
 pub fn from_roots(roots: &[Complex<f64>]) -> Result<Vec<f64>, String> {
@@ -52,12 +41,5 @@ mod tests {
         let q = from_roots(&[Complex::new(-1.0, 2.0), Complex::new(-1.0, -2.0)]).unwrap();
         assert_eq!(q, vec![1.0, 2.0, 5.0]);
         assert!(from_roots(&[Complex::new(0.0, 1.0)]).is_err());
-    }
-
-    #[test]
-    fn degree_and_horner() {
-        assert_eq!(degree(&[0.0, 0.0, 2.0, 1.0]), Some(1));
-        assert_eq!(degree(&[0.0]), None);
-        assert_eq!(eval(&[1.0, 3.0, 2.0], 2.0), 12.0);
     }
 }

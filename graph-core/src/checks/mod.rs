@@ -15,7 +15,7 @@ use crate::diag::{Diagnostic, Pos};
 use crate::expr::{Binding, Constants, Expr, Scope};
 use crate::params::expr_diagnostic;
 use crate::trace::Trace;
-use metrics::{METRICS, Metric};
+use metrics::Metric;
 use std::cell::RefCell;
 
 /// A check as written: optional name, text, position of the text.
@@ -210,11 +210,6 @@ impl Check {
         let (measured, bound) = (self.lhs.eval(&vars), self.rhs.eval(&vars));
         CheckResult { name: self.name.clone(), measured, op: self.op, bound, passed: self.op.holds(measured, bound) }
     }
-}
-
-/// The metric names, for documentation.
-pub fn metric_names() -> impl Iterator<Item = &'static str> {
-    METRICS.iter().map(|(n, _, _)| *n)
 }
 
 #[cfg(test)]
