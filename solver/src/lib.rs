@@ -7,6 +7,7 @@
 // Index loops mirror the textbook formulas of the numerical methods.
 #![allow(clippy::needless_range_loop)]
 
+pub mod dense_lu;
 pub mod lti;
 pub mod ode;
 pub mod poly;

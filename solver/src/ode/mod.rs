@@ -1,5 +1,6 @@
-//! Explicit ODE integrators: fixed-step Euler, Heun and classic RK4, and the
-//! adaptive Dormand–Prince 5(4) pair with embedded error control.
+//! ODE integrators: fixed-step Euler, Heun and classic RK4, the adaptive
+//! Dormand–Prince 5(4) pair with embedded error control, and the implicit,
+//! L-stable TR-BDF2 for stiff systems ([`trbdf2`]).
 //!
 //! The caller owns the time line. Each call to [`Integrator::advance`] moves
 //! the state from `t` towards a limit `t_limit` (the next sample hit, event or
@@ -7,6 +8,12 @@
 //! to `t_limit`, the adaptive method takes one accepted step and lands
 //! *exactly* on `t_limit` when it reaches it. All work buffers are allocated
 //! in [`Integrator::new`]; stepping allocates nothing.
+//!
+//! After every step, [`Integrator::interpolate`] evaluates a dense output
+//! over it (Dormand–Prince's own continuous extension, cubic Hermite for
+//! the others), which the simulator uses to locate zero crossings.
+
+mod trbdf2;
 
 use std::fmt;
 
@@ -39,6 +46,12 @@ pub enum Method {
         /// First trial step; `None` picks one (Hairer, Nørsett & Wanner, II.4).
         initial_step: Option<f64>,
     },
+    /// TR-BDF2 (Bank et al. 1985; Hosea & Shampine 1996, MATLAB's
+    /// `ode23tb`): a trapezoidal stage then a BDF2 stage, order 2,
+    /// L-stable, for stiff systems. Newton iterations with a
+    /// finite-difference Jacobian and a dense LU (faer), both reused across
+    /// steps while Newton converges. Error control as for Dormand–Prince.
+    Trbdf2 { rtol: f64, atol: f64, max_step: f64, initial_step: Option<f64> },
 }
 
 impl Method {
@@ -46,13 +59,13 @@ impl Method {
     pub fn max_step(&self) -> f64 {
         match *self {
             Method::Euler { step } | Method::Heun { step } | Method::Rk4 { step } => step,
-            Method::DormandPrince { max_step, .. } => max_step,
+            Method::DormandPrince { max_step, .. } | Method::Trbdf2 { max_step, .. } => max_step,
         }
     }
 
     /// Whether the method chooses its own step sizes.
     pub fn is_adaptive(&self) -> bool {
-        matches!(self, Method::DormandPrince { .. })
+        matches!(self, Method::DormandPrince { .. } | Method::Trbdf2 { .. })
     }
 
     /// Short name, as written in graph files.
@@ -62,6 +75,7 @@ impl Method {
             Method::Heun { .. } => "heun",
             Method::Rk4 { .. } => "rk4",
             Method::DormandPrince { .. } => "dopri5",
+            Method::Trbdf2 { .. } => "trbdf2",
         }
     }
 }
@@ -73,8 +87,14 @@ pub struct Stats {
     pub steps: u64,
     /// Steps rejected by error control (adaptive method only).
     pub rejected: u64,
-    /// Evaluations of `f`.
+    /// Evaluations of `f` (finite-difference Jacobian columns included).
     pub evaluations: u64,
+    /// Jacobians computed (implicit method only).
+    pub jacobians: u64,
+    /// LU factorisations of the Newton matrix (implicit method only).
+    pub factorizations: u64,
+    /// Newton iterations that failed to converge (implicit method only).
+    pub newton_failures: u64,
 }
 
 /// Why integration could not continue.
@@ -84,6 +104,8 @@ pub enum SolverError {
     StepTooSmall { t: f64, step: f64 },
     /// The error estimate was not finite (the state blew up) at `t`.
     NonFinite { t: f64 },
+    /// The Newton matrix `I − d·h·J` is singular at `t`.
+    Singular { t: f64 },
 }
 
 impl fmt::Display for SolverError {
@@ -94,6 +116,7 @@ impl fmt::Display for SolverError {
                 "step size {step:e} too small at t = {t}: the system is too stiff or discontinuous for the tolerances"
             ),
             SolverError::NonFinite { t } => write!(f, "state is not finite at t = {t}"),
+            SolverError::Singular { t } => write!(f, "the Newton matrix is singular at t = {t}"),
         }
     }
 }
@@ -133,6 +156,48 @@ const E4: f64 = 71.0 / 1920.0;
 const E5: f64 = -17253.0 / 339200.0;
 const E6: f64 = 22.0 / 525.0;
 const E7: f64 = -1.0 / 40.0;
+// Dense output of Dormand–Prince (Hairer, Nørsett & Wanner I, II.6; the
+// coefficients of Shampine 1986 used by their DOPRI5 code).
+const D1: f64 = -12715105075.0 / 11282082432.0;
+const D3: f64 = 87487479700.0 / 32700410799.0;
+const D4: f64 = -10690763975.0 / 1880347072.0;
+const D5: f64 = 701980252875.0 / 199316789632.0;
+const D6: f64 = -1453857185.0 / 822651844.0;
+const D7: f64 = 69997945.0 / 29380423.0;
+
+/// Error-control settings of the adaptive methods.
+#[derive(Clone, Copy)]
+struct Tolerance {
+    rtol: f64,
+    atol: f64,
+    max_step: f64,
+    initial_step: Option<f64>,
+}
+
+/// Whether a trial step `h` should be stretched to land on a limit `span`
+/// away: when it reaches it, or nearly (a sliver of a step left over would
+/// waste a whole step later).
+fn lands(h: f64, span: f64) -> bool {
+    h >= span * (1.0 - 1e-9) || span - h < 0.01 * h
+}
+
+/// The next step after an accepted one of size `h` whose error ratio gave
+/// `factor`. A step cut short to land on a limit says nothing about the
+/// step the dynamics allow: keep the larger proposal.
+fn next_step(h: f64, factor: f64, max_step: f64, landed: bool, previous: f64) -> f64 {
+    let proposal = (h * factor).min(max_step);
+    if landed { proposal.max(previous) } else { proposal }
+}
+
+/// RMS of `err` scaled by `atol + rtol·max(|a|, |b|)` per component.
+fn scaled_rms(err: impl Iterator<Item = f64>, a: &[f64], b: &[f64], rtol: f64, atol: f64) -> f64 {
+    let mut sum = 0.0;
+    for (i, e) in err.enumerate() {
+        let scale = atol + rtol * a[i].abs().max(b[i].abs());
+        sum += (e / scale) * (e / scale);
+    }
+    (sum / a.len() as f64).sqrt()
+}
 
 /// A stepper with preallocated stage buffers for a system of fixed size.
 pub struct Integrator {
@@ -145,6 +210,14 @@ pub struct Integrator {
     /// `k[0]` holds `f(t, x)` from the last accepted step (first same as last).
     fsal_valid: bool,
     stats: Stats,
+    /// The last step, for dense output: its start state and time, its length.
+    x0: Vec<f64>,
+    t0: f64,
+    h: f64,
+    /// Hermite methods: whether `k[6]` holds `f` at the end of the last step.
+    f1_valid: bool,
+    /// Work space of the implicit method (`None` for explicit ones).
+    implicit: Option<Box<trbdf2::Work>>,
 }
 
 impl Integrator {
@@ -158,6 +231,11 @@ impl Integrator {
             h_next: 0.0,
             fsal_valid: false,
             stats: Stats::default(),
+            x0: vec![0.0; n],
+            t0: 0.0,
+            h: 0.0,
+            f1_valid: false,
+            implicit: matches!(method, Method::Trbdf2 { .. }).then(|| Box::new(trbdf2::Work::new(n))),
         }
     }
 
@@ -175,6 +253,10 @@ impl Integrator {
         self.h_next = 0.0;
         self.fsal_valid = false;
         self.stats = Stats::default();
+        self.h = 0.0;
+        if let Some(w) = &mut self.implicit {
+            w.reset();
+        }
     }
 
     /// Tells the adaptive method that `f` changed discontinuously at the
@@ -200,17 +282,77 @@ impl Integrator {
         if x.is_empty() || t_limit <= t {
             return Ok(t_limit.max(t));
         }
+        self.x0.copy_from_slice(x);
+        self.t0 = t;
+        self.f1_valid = false;
         let h = t_limit - t;
-        match self.method {
-            Method::Euler { .. } => self.euler(sys, t, h, x),
-            Method::Heun { .. } => self.heun(sys, t, h, x),
-            Method::Rk4 { .. } => self.rk4(sys, t, h, x),
-            Method::DormandPrince { rtol, atol, max_step, initial_step } => {
-                return self.dopri5(sys, t, t_limit, x, rtol, atol, max_step, initial_step);
+        let t_new = match self.method {
+            Method::Euler { .. } => {
+                self.euler(sys, t, h, x);
+                t_limit
             }
+            Method::Heun { .. } => {
+                self.heun(sys, t, h, x);
+                t_limit
+            }
+            Method::Rk4 { .. } => {
+                self.rk4(sys, t, h, x);
+                t_limit
+            }
+            Method::DormandPrince { rtol, atol, max_step, initial_step } => {
+                self.dopri5(sys, t, t_limit, x, Tolerance { rtol, atol, max_step, initial_step })?
+            }
+            Method::Trbdf2 { rtol, atol, max_step, initial_step } => {
+                self.trbdf2(sys, t, t_limit, x, Tolerance { rtol, atol, max_step, initial_step })?
+            }
+        };
+        if !self.method.is_adaptive() {
+            self.stats.steps += 1;
         }
-        self.stats.steps += 1;
-        Ok(t_limit)
+        self.h = t_new - t;
+        Ok(t_new)
+    }
+
+    /// Evaluates the dense output of the last step at `t` (inside it) into
+    /// `out`; `x1` is the state the step ended with. Dormand–Prince uses its
+    /// fourth-order continuous extension; the other methods a cubic Hermite
+    /// interpolant through both ends and their derivatives (one extra
+    /// evaluation of `f` at the end, made on first use).
+    pub fn interpolate(&mut self, sys: &mut dyn OdeSystem, t: f64, x1: &[f64], out: &mut [f64]) {
+        let h = self.h;
+        if h <= 0.0 {
+            out.copy_from_slice(x1);
+            return;
+        }
+        let th = ((t - self.t0) / h).clamp(0.0, 1.0);
+        if let Method::DormandPrince { .. } = self.method {
+            // After acceptance k[0] holds k7 and k[6] the step's k1.
+            let k = &self.k;
+            for i in 0..out.len() {
+                let (y0, dy) = (self.x0[i], x1[i] - self.x0[i]);
+                let r3 = h * k[6][i] - dy;
+                let r4 = dy - h * k[0][i] - r3;
+                let r5 = h * (D1 * k[6][i] + D3 * k[2][i] + D4 * k[3][i] + D5 * k[4][i] + D6 * k[5][i] + D7 * k[0][i]);
+                out[i] = y0 + th * (dy + (1.0 - th) * (r3 + th * (r4 + (1.0 - th) * r5)));
+            }
+            return;
+        }
+        let (f0, f1): (&[f64], &[f64]) = match &self.implicit {
+            Some(w) => (&w.f_prev, &w.f0),
+            None => {
+                if !self.f1_valid {
+                    self.stats.evaluations += 1;
+                    sys.derivatives(self.t0 + h, x1, &mut self.k[6]);
+                    self.f1_valid = true;
+                }
+                (&self.k[0], &self.k[6])
+            }
+        };
+        let (t2, t3) = (th * th, th * th * th);
+        let (h00, h10, h01, h11) = (2.0 * t3 - 3.0 * t2 + 1.0, t3 - 2.0 * t2 + th, 3.0 * t2 - 2.0 * t3, t3 - t2);
+        for i in 0..out.len() {
+            out[i] = h00 * self.x0[i] + h10 * h * f0[i] + h01 * x1[i] + h11 * h * f1[i];
+        }
     }
 
     fn eval(&mut self, sys: &mut dyn OdeSystem, stage: usize, t: f64, from_tmp: bool, x: &[f64]) {
@@ -260,18 +402,15 @@ impl Integrator {
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn dopri5(
         &mut self,
         sys: &mut dyn OdeSystem,
         t: f64,
         t_limit: f64,
         x: &mut [f64],
-        rtol: f64,
-        atol: f64,
-        max_step: f64,
-        initial_step: Option<f64>,
+        tol: Tolerance,
     ) -> Result<f64, SolverError> {
+        let Tolerance { rtol, atol, max_step, initial_step } = tol;
         if !self.fsal_valid {
             self.eval(sys, 0, t, false, x);
             self.fsal_valid = true;
@@ -285,9 +424,8 @@ impl Integrator {
         let span = t_limit - t;
         let mut h = self.h_next.min(max_step);
         loop {
-            // Land exactly on the limit when it is within reach (or nearly:
-            // a sliver of a step left over would waste a whole step later).
-            let landing = h >= span * (1.0 - 1e-9) || span - h < 0.01 * h;
+            // Land exactly on the limit when it is within reach.
+            let landing = lands(h, span);
             if landing {
                 h = span;
             }
@@ -310,23 +448,22 @@ impl Integrator {
             self.stats.evaluations += 1;
             sys.derivatives(t_new, &self.x_new, &mut self.k[6]);
 
-            let mut sum = 0.0;
-            for i in 0..x.len() {
-                let k = &self.k;
-                let err = h * (E1 * k[0][i] + E3 * k[2][i] + E4 * k[3][i] + E5 * k[4][i] + E6 * k[5][i] + E7 * k[6][i]);
-                let scale = atol + rtol * x[i].abs().max(self.x_new[i].abs());
-                sum += (err / scale) * (err / scale);
-            }
-            let err = (sum / x.len() as f64).sqrt();
+            let k = &self.k;
+            let err = scaled_rms(
+                (0..x.len()).map(|i| {
+                    h * (E1 * k[0][i] + E3 * k[2][i] + E4 * k[3][i] + E5 * k[4][i] + E6 * k[5][i] + E7 * k[6][i])
+                }),
+                x,
+                &self.x_new,
+                rtol,
+                atol,
+            );
             if !err.is_finite() {
                 return Err(SolverError::NonFinite { t });
             }
             if err <= 1.0 {
                 let factor = if err == 0.0 { 5.0 } else { (0.9 * err.powf(-0.2)).clamp(0.2, 5.0) };
-                // A step cut short to land on the limit says nothing about
-                // the step the dynamics allow: keep the larger proposal.
-                let proposal = (h * factor).min(max_step);
-                self.h_next = if landing { proposal.max(self.h_next) } else { proposal };
+                self.h_next = next_step(h, factor, max_step, landing, self.h_next);
                 x.copy_from_slice(&self.x_new);
                 self.k.swap(0, 6);
                 self.stats.steps += 1;
@@ -363,5 +500,7 @@ impl Integrator {
     }
 }
 
+#[cfg(test)]
+mod stiff_tests;
 #[cfg(test)]
 mod tests;

@@ -1,7 +1,7 @@
 use super::*;
 
 /// Harmonic oscillator x'' = -x, x(0) = 1, x'(0) = 0: x = cos t.
-struct Oscillator;
+pub(super) struct Oscillator;
 impl OdeSystem for Oscillator {
     fn derivatives(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) {
         dx[0] = x[1];
@@ -24,7 +24,7 @@ fn global_error(method: Method, n: usize) -> f64 {
 }
 
 /// Observed order from halving the step: log2(e(h) / e(h/2)).
-fn observed_order(make: impl Fn(f64) -> Method, n: usize) -> f64 {
+pub(super) fn observed_order(make: impl Fn(f64) -> Method, n: usize) -> f64 {
     let e1 = global_error(make(2.0 / n as f64), n);
     let e2 = global_error(make(1.0 / n as f64), 2 * n);
     (e1 / e2).log2()
