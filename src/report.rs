@@ -30,7 +30,8 @@ fn solver_json(method: Method) -> Value {
         Method::Euler { step } | Method::Heun { step } | Method::Rk4 { step } => {
             json!({ "method": method.name(), "step": step })
         }
-        Method::DormandPrince { rtol, atol, max_step, initial_step } => json!({
+        Method::DormandPrince { rtol, atol, max_step, initial_step }
+        | Method::Trbdf2 { rtol, atol, max_step, initial_step } => json!({
             "method": method.name(), "rtol": rtol, "atol": atol, "max_step": max_step,
             "initial_step": initial_step,
         }),
@@ -48,6 +49,10 @@ pub fn to_json(info: &RunInfo) -> Value {
             "solver_steps": s.solver.steps,
             "rejected_steps": s.solver.rejected,
             "derivative_evaluations": s.solver.evaluations,
+            "jacobian_evaluations": s.solver.jacobians,
+            "lu_factorizations": s.solver.factorizations,
+            "newton_failures": s.solver.newton_failures,
+            "events": s.events,
         },
         "seed": info.seed,
         "stop_time": info.stop,

@@ -10,6 +10,16 @@
 //!    every major step (for memory such as a rate limiter's last output);
 //! 4. integration of continuous states via [`Block::derivatives`], the
 //!    solver's minor steps calling `output` of continuous blocks again.
+//!
+//! Blocks with corners or switches have *modes* and *zero crossings*
+//! (Simulink's terms). A block switches mode only where [`Io::may_switch`]
+//! says so — at major steps; in minor steps its mode is frozen, so each side
+//! of a corner integrates its own smooth equation. Its zero-crossing
+//! functions ([`Block::zero_crossings`]) tell the simulator where a mode
+//! change is due; the simulator locates the sign change inside the step and
+//! ends the step there, and the next major step switches. Because of that,
+//! `output` must be idempotent within a major step: it may run twice (after
+//! a [`Block::major_step`] reset) and must not advance state.
 
 use std::fmt;
 
@@ -48,6 +58,30 @@ impl fmt::Display for SampleTime {
             }
             SampleTime::Inherited => f.write_str("inherited"),
             SampleTime::Constant => f.write_str("constant"),
+        }
+    }
+}
+
+/// Which sign changes of a zero-crossing function are events.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Crossing {
+    /// From negative to positive.
+    Rising,
+    /// From positive to negative.
+    Falling,
+    Either,
+    /// Not watched in the block's current mode.
+    Ignore,
+}
+
+impl Crossing {
+    /// Whether a change from sign `before` (±1) to the opposite is an event.
+    pub fn accepts(self, before: f64) -> bool {
+        match self {
+            Crossing::Rising => before < 0.0,
+            Crossing::Falling => before > 0.0,
+            Crossing::Either => true,
+            Crossing::Ignore => false,
         }
     }
 }
@@ -124,6 +158,7 @@ pub struct Io<'a> {
     /// This block's continuous states (empty for blocks without any).
     pub x: &'a [f64],
     left_limit: bool,
+    frozen: bool,
     signals: &'a mut [f64],
     inputs: &'a [Port],
     outputs: &'a [Port],
@@ -138,7 +173,22 @@ impl<'a> Io<'a> {
         inputs: &'a [Port],
         outputs: &'a [Port],
     ) -> Self {
-        Io { t, x, left_limit, signals, inputs, outputs }
+        Io { t, x, left_limit, frozen: false, signals, inputs, outputs }
+    }
+
+    /// Freezes modes (a solver minor step with zero-crossing detection).
+    pub fn with_frozen_modes(mut self, frozen: bool) -> Self {
+        self.frozen = frozen;
+        self
+    }
+
+    /// Whether a block with modes may switch mode now: at major steps, and
+    /// at every evaluation when zero-crossing detection is off (the block
+    /// then acts as a plain function). False in the solver's minor steps
+    /// under detection: the mode chosen at the last major step holds.
+    #[inline]
+    pub fn may_switch(&self) -> bool {
+        !self.frozen
     }
 
     /// All elements of input `port`.
@@ -242,5 +292,29 @@ pub trait Block: Send {
     /// simulator can put a major step exactly there.
     fn next_event(&self, _t: f64) -> f64 {
         f64::INFINITY
+    }
+
+    /// Number of zero-crossing functions (after `set_width`), fixed for the
+    /// run. Only continuous-rate blocks are watched.
+    fn num_zero_crossings(&self) -> usize {
+        0
+    }
+
+    /// Writes the zero-crossing functions at `io.t`: continuous in time while
+    /// the block's mode is frozen; a sign change accepted by
+    /// [`Block::crossing_direction`] is an event.
+    fn zero_crossings(&self, _io: &Io, _g: &mut [f64]) {}
+
+    /// Which sign changes of function `k` are events, in the current mode.
+    fn crossing_direction(&self, _k: usize) -> Crossing {
+        Crossing::Either
+    }
+
+    /// Runs at every major step after all outputs, for blocks with zero
+    /// crossings: the block may reset its continuous states `x` (`io.x` is
+    /// empty here). Returns whether anything changed, so that outputs are
+    /// computed again with the new states.
+    fn major_step(&mut self, _io: &Io, _x: &mut [f64]) -> bool {
+        false
     }
 }

@@ -22,6 +22,23 @@ pub struct SimConfig {
     pub stop: f64,
     pub method: Method,
     pub seed: u64,
+    pub zero_crossing: ZeroCrossing,
+}
+
+/// `solver: { zero_crossing: … }`: whether the simulator locates the zero
+/// crossings blocks declare (see [`crate::Block::zero_crossings`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ZeroCrossing {
+    /// Blocks switch mode only at major steps, found where they fall
+    /// (the default of fixed-step methods, as in Simulink).
+    Off,
+    /// Crossings are located and end the step; chattering (more than
+    /// [`crate::sim::MAX_CONSECUTIVE_EVENTS`] events at nearly one time)
+    /// stops the run with an error naming the block.
+    On,
+    /// As `On`, but a chattering block's crossings are ignored from then on
+    /// and the run reports it.
+    Adaptive,
 }
 
 /// A block after expansion, with the parameters its file defines.
@@ -154,8 +171,8 @@ fn eval_parameters(
 }
 
 const SIM_KEYS: [&str; 3] = ["stop", "solver", "seed"];
-const SOLVER_KEYS: [&str; 6] = ["method", "step", "rtol", "atol", "max_step", "initial_step"];
-const METHODS: [&str; 4] = ["dopri5", "rk4", "heun", "euler"];
+const SOLVER_KEYS: [&str; 7] = ["method", "step", "rtol", "atol", "max_step", "initial_step", "zero_crossing"];
+const METHODS: [&str; 5] = ["dopri5", "trbdf2", "rk4", "heun", "euler"];
 
 fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, Diagnostic> {
     let entries = match sim {
@@ -219,18 +236,31 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
                 .with_hint(format!("solver: {{ method: {name}, step: 1.0e-4 }}"))
         })
     };
+    let adaptive_step = || -> Result<(), Diagnostic> {
+        match yaml::lookup(solver_entries, "step") {
+            Some(v) => Err(Diagnostic::at(
+                &v.pos,
+                format!("{method_name} chooses its own steps: use `max_step` (or a fixed-step method)"),
+            )),
+            None => Ok(()),
+        }
+    };
     let method = match method_name {
         "dopri5" | "ode45" => {
-            if let Some(v) = yaml::lookup(solver_entries, "step") {
-                return Err(Diagnostic::at(
-                    &v.pos,
-                    "dopri5 chooses its own steps: use `max_step` (or a fixed-step method)",
-                ));
-            }
+            adaptive_step()?;
             Method::DormandPrince {
                 rtol: opt("rtol")?.unwrap_or(1e-6),
                 atol: opt("atol")?.unwrap_or(1e-9),
                 max_step: opt("max_step")?.unwrap_or(stop / 200.0),
+                initial_step: opt("initial_step")?,
+            }
+        }
+        "trbdf2" | "ode23tb" => {
+            adaptive_step()?;
+            Method::Trbdf2 {
+                rtol: opt("rtol")?.unwrap_or(1e-6),
+                atol: opt("atol")?.unwrap_or(1e-9),
+                max_step: opt("max_step")?.unwrap_or(stop / 10.0),
                 initial_step: opt("initial_step")?,
             }
         }
@@ -247,11 +277,29 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
     if !method.is_adaptive() {
         for key in ["rtol", "atol", "max_step", "initial_step"] {
             if let Some(v) = yaml::lookup(solver_entries, key) {
-                return Err(Diagnostic::at(&v.pos, format!("`{key}` applies to dopri5, not to `{method_name}`")));
+                return Err(Diagnostic::at(
+                    &v.pos,
+                    format!("`{key}` applies to dopri5 and trbdf2, not to `{method_name}`"),
+                ));
             }
         }
     }
-    Ok(SimConfig { stop, method, seed })
+    let zero_crossing = match yaml::lookup(solver_entries, "zero_crossing") {
+        None if method.is_adaptive() => ZeroCrossing::On,
+        None => ZeroCrossing::Off,
+        Some(v) => match &v.kind {
+            Kind::Bool(true) => ZeroCrossing::On,
+            Kind::Bool(false) => ZeroCrossing::Off,
+            Kind::Str(s) if s == "adaptive" => ZeroCrossing::Adaptive,
+            _ => {
+                return Err(Diagnostic::at(
+                    &v.pos,
+                    format!("`zero_crossing` must be true, false or adaptive, found {}", v.describe()),
+                ));
+            }
+        },
+    };
+    Ok(SimConfig { stop, method, seed, zero_crossing })
 }
 
 fn check_keys(entries: &[(Key, Yaml)], known: &[&str], section: &str) -> Result<(), Diagnostic> {

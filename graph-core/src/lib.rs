@@ -19,10 +19,11 @@ pub mod spec;
 pub mod trace;
 pub mod yaml;
 
+pub use block::Crossing;
 pub use block::{Block, Interface, Io, SampleTime, Width};
 pub use compile::{Model, compile};
 pub use diag::{Diagnostic, Pos};
-pub use flatten::{FlatGraph, SimConfig, load, load_str};
+pub use flatten::{FlatGraph, SimConfig, ZeroCrossing, load, load_str};
 pub use params::Params;
 pub use registry::{BlockType, Built, ParamDoc, PortDoc, Registry};
 pub use sim::{RunStats, SimError, Simulator};

@@ -6,12 +6,17 @@
 //! methods), every clock's sample hits, block events (a step's switching
 //! time) and the stop time; the adaptive method adds its own accepted steps.
 //! Hits are computed from integer tick counts (`offset + k·period`), never
-//! by accumulating floating-point time. After `initialize`, stepping
+//! by accumulating floating-point time. Zero crossings end a step where a
+//! block's mode must change ([`events`]). After `initialize`, stepping
 //! allocates nothing.
+
+mod events;
 
 use crate::block::{Io, Port};
 use crate::compile::{Model, Rate, Slot};
 use ctlgraph_solver::{Integrator, Method, OdeSystem, SolverError, Stats};
+pub use events::MAX_CONSECUTIVE_EVENTS;
+use events::Watch;
 use std::fmt;
 
 /// Why a run stopped early.
@@ -28,6 +33,13 @@ pub enum SimError {
         t: f64,
         error: SolverError,
     },
+    /// A block's zero crossings kept firing at (nearly) one instant: the
+    /// model chatters (a Zeno or sliding behaviour).
+    Chattering {
+        t: f64,
+        block: String,
+        events: u32,
+    },
 }
 
 impl fmt::Display for SimError {
@@ -37,6 +49,12 @@ impl fmt::Display for SimError {
                 write!(f, "t = {t}: block `{block}`: {what} is {value}")
             }
             SimError::Solver { t, error } => write!(f, "t = {t}: solver: {error}"),
+            SimError::Chattering { t, block, events } => write!(
+                f,
+                "t = {t}: block `{block}`: {events} zero crossings in a row at nearly the same time (chattering); \
+                 hint: `solver: {{ zero_crossing: adaptive }}` ignores a chattering block's crossings, \
+                 or reformulate (add hysteresis, a boundary layer)"
+            ),
         }
     }
 }
@@ -64,6 +82,8 @@ impl Clock {
 pub struct RunStats {
     pub major_steps: u64,
     pub solver: Stats,
+    /// Zero crossings located (each ended a step).
+    pub events: u64,
 }
 
 /// A model being simulated.
@@ -88,6 +108,10 @@ pub struct Simulator {
     continuous: Vec<usize>,
     /// Blocks with continuous states.
     stateful: Vec<usize>,
+    /// Zero-crossing functions and their detection.
+    watch: Watch,
+    /// Per block: whether its mode is frozen in minor steps.
+    frozen: Vec<bool>,
 }
 
 impl Simulator {
@@ -105,8 +129,10 @@ impl Simulator {
             .chain([stop, method.max_step()])
             .filter(|&p| p > 0.0)
             .fold(f64::INFINITY, f64::min);
-        let continuous = (0..model.meta.len()).filter(|&i| model.meta[i].rate == Rate::Continuous).collect();
+        let continuous: Vec<usize> =
+            (0..model.meta.len()).filter(|&i| model.meta[i].rate == Rate::Continuous).collect();
         let stateful = (0..model.meta.len()).filter(|&i| !model.meta[i].states.is_empty()).collect();
+        let watch = Watch::new(&model, &continuous, model.sim.zero_crossing);
         let mut sim = Simulator {
             signals: vec![0.0; model.signal_len],
             x: vec![0.0; model.n_states],
@@ -122,6 +148,8 @@ impl Simulator {
             major_steps: 0,
             continuous,
             stateful,
+            watch,
+            frozen: vec![false; model.blocks.len()],
             model,
         };
         sim.reset();
@@ -144,6 +172,7 @@ impl Simulator {
         self.mark_hits();
         self.next_event = self.earliest_event();
         self.integ.reset();
+        self.watch.reset(&mut self.frozen);
     }
 
     pub fn model(&self) -> &Model {
@@ -172,7 +201,13 @@ impl Simulator {
     }
 
     pub fn stats(&self) -> RunStats {
-        RunStats { major_steps: self.major_steps, solver: self.integ.stats() }
+        RunStats { major_steps: self.major_steps, solver: self.integ.stats(), events: self.watch.events }
+    }
+
+    /// What the run has to say beyond its numbers (blocks whose chattering
+    /// crossings `zero_crossing: adaptive` ignored).
+    pub fn warnings(&self) -> &[String] {
+        &self.watch.warnings
     }
 
     /// Whether the run has reached its stop time.
@@ -216,11 +251,16 @@ impl Simulator {
         }
     }
 
-    /// Step (1) of a major step: outputs in execution order, then a check
-    /// that every signal is finite.
+    /// Step (1) of a major step: outputs in execution order (again after a
+    /// block reset its states here), the zero-crossing signs for the next
+    /// step, then a check that every signal is finite.
     pub fn outputs(&mut self) -> Result<(), SimError> {
         self.sweep(false);
+        if self.major_step_events() {
+            self.sweep(false);
+        }
         self.first = false;
+        self.watch.record_signs(&mut self.model, &mut self.signals, &self.x, self.t);
         if let Some(k) = self.signals.iter().position(|v| !v.is_finite()) {
             let (block, port) = self.model.signal_owner(k).map_or(("?".to_string(), "?"), |(m, p)| (m.name.clone(), p));
             return Err(SimError::NonFinite {
@@ -233,26 +273,49 @@ impl Simulator {
         Ok(())
     }
 
+    /// Blocks with zero crossings may reset their states at a major step;
+    /// returns whether any did.
+    fn major_step_events(&mut self) -> bool {
+        let m = &mut self.model;
+        let mut changed = false;
+        for &i in &self.watch.blocks {
+            let slot = &m.slots[i];
+            let io = io_for(slot, self.t, false, &[], &mut self.signals, &m.in_ports, &m.out_ports);
+            changed |= m.blocks[i].major_step(&io, &mut self.x[slot.states.clone()]);
+        }
+        changed
+    }
+
     /// Steps (3) and (4): discrete updates at hits (and major-step updates
-    /// of continuous blocks), then integration to the next major step.
+    /// of continuous blocks), then integration to the next major step — or
+    /// to the first zero crossing before it.
     pub fn advance(&mut self) -> Result<(), SimError> {
         self.sweep(true);
         let target = self.next_major_time();
-        let t_new = if self.x.is_empty() {
+        let t0 = self.t;
+        let mut sys = Minor {
+            model: &mut self.model,
+            signals: &mut self.signals,
+            continuous: &self.continuous,
+            stateful: &self.stateful,
+            frozen: &self.frozen,
+            t_end: target,
+        };
+        let mut t_new = if self.x.is_empty() {
             // Nothing to integrate; max_step still bounds the adaptive
             // method's major steps so continuous sources are sampled finely.
-            target.min(self.t + self.integ.method().max_step())
+            target.min(t0 + self.integ.method().max_step())
         } else {
-            let mut sys = Minor {
-                model: &mut self.model,
-                signals: &mut self.signals,
-                continuous: &self.continuous,
-                stateful: &self.stateful,
-                t_end: target,
-            };
-            let t = self.t;
-            self.integ.advance(&mut sys, t, target, &mut self.x).map_err(|error| SimError::Solver { t, error })?
+            self.integ.advance(&mut sys, t0, target, &mut self.x).map_err(|error| SimError::Solver { t: t0, error })?
         };
+        let event = self.watch.locate(&mut sys, &mut self.integ, t0, t_new, &mut self.x);
+        if let Some(t_event) = event {
+            t_new = t_event;
+            self.integ.invalidate();
+            if let Some(block) = self.watch.count_event(t_event, &self.model)? {
+                self.frozen[block] = false;
+            }
+        }
         // Land exactly on the target when the solver reached it.
         self.t = if (target - t_new).abs() <= self.tol { target } else { t_new };
         if self.grid_step > 0.0 {
@@ -266,11 +329,11 @@ impl Simulator {
             clamped |= self.model.blocks[i].clamp_states(&mut self.x[meta.states.clone()]);
         }
         let hit = self.mark_hits();
-        let event = self.t >= self.next_event - self.tol;
-        if event {
+        let block_event = self.t >= self.next_event - self.tol;
+        if block_event {
             self.next_event = self.earliest_event();
         }
-        if hit || event || clamped {
+        if hit || block_event || clamped {
             self.integ.invalidate();
         }
         if let Some(k) = self.x.iter().position(|v| !v.is_finite()) {
@@ -320,7 +383,7 @@ impl Simulator {
     }
 }
 
-fn io_for<'a>(
+pub(crate) fn io_for<'a>(
     meta: &Slot,
     t: f64,
     left_limit: bool,
@@ -339,28 +402,52 @@ fn io_for<'a>(
     )
 }
 
-/// The ODE the solver sees: set states, recompute continuous outputs, ask
-/// stateful blocks for derivatives. Discrete outputs hold.
-struct Minor<'a> {
+/// The ODE the solver sees: set states, recompute continuous outputs (modes
+/// frozen where zero crossings are watched), ask stateful blocks for
+/// derivatives. Discrete outputs hold.
+pub(crate) struct Minor<'a> {
     model: &'a mut Model,
     signals: &'a mut [f64],
     continuous: &'a [usize],
     stateful: &'a [usize],
+    /// Per block: whether its mode is frozen in minor steps.
+    frozen: &'a [bool],
     t_end: f64,
 }
 
-impl OdeSystem for Minor<'_> {
-    fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+impl Minor<'_> {
+    /// Continuous outputs at (t, x), modes frozen.
+    fn outputs(&mut self, t: f64, x: &[f64]) {
         let m = &mut *self.model;
         let left = t >= self.t_end;
         for &i in self.continuous {
             let meta = &m.slots[i];
-            let mut io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports);
+            let mut io =
+                io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).with_frozen_modes(self.frozen[i]);
             m.blocks[i].output(&mut io);
         }
+    }
+}
+
+impl Minor<'_> {
+    /// Block `i`'s zero-crossing functions at (t, x), outputs computed.
+    fn zero_crossings(&mut self, i: usize, t: f64, x: &[f64], g: &mut [f64]) {
+        let m = &mut *self.model;
+        let io = io_for(&m.slots[i], t, t >= self.t_end, x, self.signals, &m.in_ports, &m.out_ports)
+            .with_frozen_modes(self.frozen[i]);
+        m.blocks[i].zero_crossings(&io, g);
+    }
+}
+
+impl OdeSystem for Minor<'_> {
+    fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        self.outputs(t, x);
+        let m = &mut *self.model;
+        let left = t >= self.t_end;
         for &i in self.stateful {
             let meta = &m.slots[i];
-            let io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports);
+            let io =
+                io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).with_frozen_modes(self.frozen[i]);
             m.blocks[i].derivatives(&io, &mut dx[meta.states.clone()]);
         }
     }

@@ -1,0 +1,247 @@
+//! Zero-crossing detection: after every solver step the watched functions'
+//! signs are compared with their signs at the step's start; a change in a
+//! direction the block accepts is located inside the step on the solver's
+//! dense output by the Illinois variant of regula falsi (bracketing,
+//! superlinear), to a time tolerance of a few ulps of t. The step then ends
+//! at the first such crossing — its right side, where the sign has changed —
+//! and the next major step lets blocks switch mode there.
+//!
+//! Chattering (Simulink's "consecutive zero crossings"): more than
+//! [`MAX_CONSECUTIVE_EVENTS`] events each within 1e-12·max(1, |t|) of the
+//! last stop the run, or with `zero_crossing: adaptive` turn that block's
+//! detection off with a warning. Either way a Zeno model cannot hang.
+
+use super::{Minor, SimError, io_for};
+use crate::compile::Model;
+use crate::flatten::ZeroCrossing;
+use ctlgraph_solver::Integrator;
+use std::ops::Range;
+
+/// Events in a row at nearly one time before the run counts as chattering
+/// (Simulink's default for "Number of consecutive zero crossings").
+pub const MAX_CONSECUTIVE_EVENTS: u32 = 1000;
+
+/// Root-finding iterations per crossing before settling for the bracket.
+const MAX_ITERATIONS: usize = 200;
+
+/// The watched zero-crossing functions of a model and their state.
+pub(crate) struct Watch {
+    mode: ZeroCrossing,
+    /// Continuous blocks with zero crossings, execution order: their
+    /// `major_step` runs at every major step whatever the mode.
+    pub blocks: Vec<usize>,
+    /// Each block's functions in `sign`, `g0`, `g`.
+    ranges: Vec<Range<usize>>,
+    /// Per entry of `blocks`: whether its crossings are located.
+    active: Vec<bool>,
+    /// Sign of each function at the last major step where it was nonzero.
+    sign: Vec<f64>,
+    /// Values at the last major step.
+    g0: Vec<f64>,
+    /// Values at the end of the current step.
+    g1: Vec<f64>,
+    /// Scratch: values at a trial time.
+    g: Vec<f64>,
+    x_trial: Vec<f64>,
+    pub events: u64,
+    consecutive: u32,
+    last_event: f64,
+    /// Entry of `blocks` whose crossing ended the last step.
+    last_block: usize,
+    pub warnings: Vec<String>,
+}
+
+impl Watch {
+    pub fn new(model: &Model, continuous: &[usize], mode: ZeroCrossing) -> Self {
+        let mut blocks = Vec::new();
+        let mut ranges = Vec::new();
+        let mut n = 0;
+        for &i in continuous {
+            let count = model.blocks[i].num_zero_crossings();
+            if count > 0 {
+                blocks.push(i);
+                ranges.push(n..n + count);
+                n += count;
+            }
+        }
+        Watch {
+            mode,
+            active: vec![mode != ZeroCrossing::Off; blocks.len()],
+            blocks,
+            ranges,
+            sign: vec![0.0; n],
+            g0: vec![0.0; n],
+            g1: vec![0.0; n],
+            g: vec![0.0; n],
+            x_trial: vec![0.0; model.n_states],
+            events: 0,
+            consecutive: 0,
+            last_event: f64::NEG_INFINITY,
+            last_block: 0,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// Back to the start of a run (detection re-enabled); writes into
+    /// `frozen` which model blocks have their modes frozen in minor steps.
+    pub fn reset(&mut self, frozen: &mut [bool]) {
+        let on = self.mode != ZeroCrossing::Off;
+        self.active.iter_mut().for_each(|a| *a = on);
+        frozen.iter_mut().for_each(|f| *f = false);
+        for &i in &self.blocks {
+            frozen[i] = on;
+        }
+        self.sign.iter_mut().for_each(|s| *s = 0.0);
+        self.events = 0;
+        self.consecutive = 0;
+        self.last_event = f64::NEG_INFINITY;
+        self.warnings.clear();
+    }
+
+    /// At a major step, after the outputs: the functions' values and signs
+    /// that the next step's end is compared with.
+    pub fn record_signs(&mut self, model: &mut Model, signals: &mut [f64], x: &[f64], t: f64) {
+        for (b, &i) in self.blocks.iter().enumerate() {
+            if !self.active[b] {
+                continue;
+            }
+            let r = self.ranges[b].clone();
+            let io = io_for(&model.slots[i], t, false, x, signals, &model.in_ports, &model.out_ports);
+            model.blocks[i].zero_crossings(&io, &mut self.g0[r.clone()]);
+            for k in r {
+                if self.g0[k] != 0.0 {
+                    self.sign[k] = self.g0[k].signum();
+                }
+            }
+        }
+    }
+
+    /// After a step from `t0` to `t1` that ended in state `x`: the time of
+    /// the first accepted crossing inside it, with `x` moved there, or
+    /// `None` when no watched function changed sign.
+    pub fn locate(&mut self, sys: &mut Minor, integ: &mut Integrator, t0: f64, t1: f64, x: &mut [f64]) -> Option<f64> {
+        if !self.active.iter().any(|&a| a) || t1 <= t0 {
+            return None;
+        }
+        sys.outputs(t1, x);
+        for (b, &i) in self.blocks.iter().enumerate() {
+            if self.active[b] {
+                sys.zero_crossings(i, t1, x, &mut self.g1[self.ranges[b].clone()]);
+            }
+        }
+        // The earliest crossing: each later candidate is searched only up
+        // to the earliest found so far.
+        let mut first: Option<(f64, usize)> = None;
+        for b in 0..self.blocks.len() {
+            if !self.active[b] {
+                continue;
+            }
+            for k in self.ranges[b].clone() {
+                let s = self.sign[k];
+                let direction = sys.model.blocks[self.blocks[b]].crossing_direction(k - self.ranges[b].start);
+                if s == 0.0 || self.g1[k] * s >= 0.0 || !direction.accepts(s) {
+                    continue;
+                }
+                let end = first.map_or(t1, |(t, _)| t);
+                let g_end = if end == t1 { self.g1[k] } else { self.value(sys, integ, x, b, k, end) };
+                if g_end * s < 0.0 {
+                    first = Some((self.root(sys, integ, x, b, k, t0, end, g_end), b));
+                }
+            }
+        }
+        let (t, b) = first?;
+        if !x.is_empty() {
+            integ.interpolate(sys, t, x, &mut self.x_trial);
+            x.copy_from_slice(&self.x_trial);
+        }
+        self.last_block = b;
+        Some(t)
+    }
+
+    /// Function `k` (of block entry `b`) at time `t` inside the last step.
+    fn value(&mut self, sys: &mut Minor, integ: &mut Integrator, x1: &[f64], b: usize, k: usize, t: f64) -> f64 {
+        let xt: &[f64] = if x1.is_empty() {
+            x1
+        } else {
+            integ.interpolate(sys, t, x1, &mut self.x_trial);
+            &self.x_trial
+        };
+        sys.outputs(t, xt);
+        sys.zero_crossings(self.blocks[b], t, xt, &mut self.g[self.ranges[b].clone()]);
+        self.g[k]
+    }
+
+    /// The Illinois method on s·g_k over [t0, t1], where s·g_k(t1) < 0:
+    /// returns the right end of a bracket no wider than a few ulps of t.
+    #[allow(clippy::too_many_arguments)]
+    fn root(
+        &mut self,
+        sys: &mut Minor,
+        integ: &mut Integrator,
+        x1: &[f64],
+        b: usize,
+        k: usize,
+        t0: f64,
+        t1: f64,
+        g1: f64,
+    ) -> f64 {
+        let s = self.sign[k];
+        let (mut lo, mut hi) = (t0, t1);
+        let (mut g_lo, mut g_hi) = (s * self.g0[k], s * g1);
+        let tol = 8.0 * f64::EPSILON * t1.abs().max(1.0);
+        let mut last_moved = 0i8;
+        for _ in 0..MAX_ITERATIONS {
+            if hi - lo <= tol {
+                break;
+            }
+            let secant = if g_lo > 0.0 { hi - g_hi * (hi - lo) / (g_hi - g_lo) } else { f64::NAN };
+            let c = if secant > lo && secant < hi { secant } else { 0.5 * (lo + hi) };
+            let gc = s * self.value(sys, integ, x1, b, k, c);
+            if gc > 0.0 {
+                lo = c;
+                g_lo = gc;
+                if last_moved == 1 {
+                    g_hi *= 0.5;
+                }
+                last_moved = 1;
+            } else {
+                hi = c;
+                g_hi = gc;
+                if last_moved == -1 {
+                    g_lo *= 0.5;
+                }
+                last_moved = -1;
+            }
+        }
+        hi
+    }
+
+    /// Counts a located event at `t`; past the chattering limit, an error
+    /// or (adaptive) the block's detection switched off, returning the
+    /// model block whose modes must no longer be frozen.
+    pub fn count_event(&mut self, t: f64, model: &Model) -> Result<Option<usize>, SimError> {
+        self.events += 1;
+        if t - self.last_event <= 1e-12 * t.abs().max(1.0) {
+            self.consecutive += 1;
+        } else {
+            self.consecutive = 0;
+        }
+        self.last_event = t;
+        if self.consecutive < MAX_CONSECUTIVE_EVENTS {
+            return Ok(None);
+        }
+        let b = self.last_block;
+        let block = self.blocks[b];
+        let name = model.meta[block].name.clone();
+        if self.mode != ZeroCrossing::Adaptive {
+            return Err(SimError::Chattering { t, block: name, events: self.consecutive });
+        }
+        self.active[b] = false;
+        self.consecutive = 0;
+        self.warnings.push(format!(
+            "t = {t}: block `{name}` chattered ({MAX_CONSECUTIVE_EVENTS} zero crossings in a row); \
+             its crossings are ignored from here on"
+        ));
+        Ok(Some(block))
+    }
+}
