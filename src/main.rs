@@ -280,6 +280,7 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
             simulated: sim.time(),
             wall_seconds: wall,
             error: result.as_ref().err().map(ToString::to_string),
+            warnings: sim.warnings(),
             checks: &results,
         };
         let text = serde_json::to_string_pretty(&to_json(&info)).unwrap_or_default();
@@ -296,12 +297,17 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
     }
     let simulated = sim.time();
     let wall_text = if wall < 1.0 { format!("{:.2} ms", wall * 1e3) } else { format!("{wall:.3} s") };
+    let stats = sim.stats();
+    let events = if stats.events > 0 { format!(", {} events located", stats.events) } else { String::new() };
     println!(
-        "{}: {} steps, {simulated} s simulated in {wall_text} wall ({:.1}x real time)",
+        "{}: {} steps{events}, {simulated} s simulated in {wall_text} wall ({:.1}x real time)",
         graph.display(),
-        sim.stats().major_steps,
+        stats.major_steps,
         simulated / wall.max(1e-9)
     );
+    for w in sim.warnings() {
+        println!("  warning: {w}");
+    }
     for r in &results {
         println!("  {r}");
     }

@@ -17,6 +17,7 @@ pub struct RunInfo<'a> {
     pub simulated: f64,
     pub wall_seconds: f64,
     pub error: Option<String>,
+    pub warnings: &'a [String],
     pub checks: &'a [CheckResult],
 }
 
@@ -63,6 +64,7 @@ pub fn to_json(info: &RunInfo) -> Value {
         })).collect::<Vec<_>>(),
         "status": if info.error.is_some() { "failed" } else if info.checks.iter().any(|c| !c.passed) { "checks failed" } else { "ok" },
         "error": info.error,
+        "warnings": info.warnings,
     })
 }
 

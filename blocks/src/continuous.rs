@@ -1,6 +1,6 @@
-//! Continuous dynamics: integrator, filtered derivative, and linear systems
-//! given as transfer function, zeros-poles-gain or state space. States are
-//! integrated by the simulation's solver.
+//! Continuous dynamics: filtered derivative and linear systems given as
+//! transfer function, zeros-poles-gain or state space (the integrator has
+//! its own module). States are integrated by the simulation's solver.
 
 use crate::{U_ANY, U_SCALAR, Y_SAME, Y_SCALAR, param};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
@@ -10,23 +10,6 @@ use ctlgraph_solver::{StateSpace, tf2ss, zpk2tf};
 use nalgebra::Complex;
 
 pub const TYPES: &[BlockType] = &[
-    BlockType {
-        name: "integrator",
-        category: "dynamics",
-        summary: "y = ∫u dt, with initial condition and optional limits.",
-        doc: "x' = u, y = x, elementwise. With limits, x stays in [lower, upper]: the derivative is \
-              zeroed while x sits on a limit and u pushes outward, and x is projected back after each \
-              step (Simulink's limited integrator). No direct feedthrough: it closes loops legally.\n\
-              Bounds: with limits, y stays in [lower, upper] for any input; without, |y(t) − x(0)| <= t·sup|u| (not BIBO stable).",
-        inputs: U_ANY,
-        outputs: Y_SAME,
-        params: &[
-            param("initial", Some("0"), "x(0): a number or one per element"),
-            param("lower", Some("-inf"), "lower limit of x"),
-            param("upper", Some("inf"), "upper limit of x"),
-        ],
-        build: build_integrator,
-    },
     BlockType {
         name: "derivative",
         category: "dynamics",
@@ -103,57 +86,6 @@ pub(crate) fn initial_vector(v: &[f64], n: usize) -> Result<Vec<f64>, String> {
         len if len == n => Ok(v.to_vec()),
         len => Err(format!("`initial` has {len} values but the block has {n} states")),
     }
-}
-
-/// Elementwise integrator with optional limits.
-pub struct Integrator {
-    initial: Vec<f64>,
-    x0: Vec<f64>,
-    lower: f64,
-    upper: f64,
-}
-
-impl Block for Integrator {
-    fn set_width(&mut self, width: usize) -> Result<(), String> {
-        self.x0 = initial_vector(&self.initial, width)?;
-        Ok(())
-    }
-    fn num_states(&self) -> usize {
-        self.x0.len()
-    }
-    fn initialize(&mut self, x0: &mut [f64]) {
-        x0.copy_from_slice(&self.x0);
-    }
-    fn output(&mut self, io: &mut Io) {
-        let x = io.x;
-        io.output(0).copy_from_slice(x);
-    }
-    fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
-        for (k, d) in dx.iter_mut().enumerate() {
-            let (x, u) = (io.x[k], io.u_at(0, k));
-            let blocked = (x >= self.upper && u > 0.0) || (x <= self.lower && u < 0.0);
-            *d = if blocked { 0.0 } else { u };
-        }
-    }
-    fn clamp_states(&self, x: &mut [f64]) -> bool {
-        let mut moved = false;
-        for v in x {
-            let c = v.clamp(self.lower, self.upper);
-            moved |= c != *v;
-            *v = c;
-        }
-        moved
-    }
-}
-
-fn build_integrator(p: &mut Params) -> Result<Built, Diagnostic> {
-    let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
-    let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
-    if let Some(v) = initial.iter().find(|v| !(lower..=upper).contains(*v)) {
-        return Err(p.error("initial", format!("{v} is outside [{lower}, {upper}]")));
-    }
-    let iface = Interface::new(SampleTime::Continuous).input("u", Width::Common, false).output("y", Width::Common);
-    Ok(Built::new(Integrator { initial, x0: Vec::new(), lower, upper }, iface))
 }
 
 /// s/(τs + 1), elementwise.

@@ -9,8 +9,10 @@ pub mod adrc;
 pub mod continuous;
 pub mod discrete;
 pub mod estimation;
+pub mod events;
 pub mod force;
 pub mod fuzzy;
+pub mod integrator;
 pub mod math;
 pub mod noise;
 pub mod nonlinear;
@@ -32,6 +34,8 @@ pub fn registry() -> Registry {
         math::TYPES,
         nonlinear::TYPES,
         continuous::TYPES,
+        integrator::TYPES,
+        events::TYPES,
         discrete::TYPES,
         pid::TYPES,
         adrc::TYPES,

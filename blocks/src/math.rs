@@ -2,12 +2,13 @@
 //! `fcn` (an expression of the inputs and time). All elementwise on any
 //! width, scalar inputs broadcast.
 
+use crate::nonlinear::Piecewise;
 use crate::{SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, Y_SCALAR, param};
 use ctlgraph_core::expr::Expr;
 use ctlgraph_core::params::{VarScope, expr_diagnostic};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::yaml::Kind;
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Crossing, Diagnostic, Interface, Io, Params, SampleTime, Width};
 
 const UN: &[PortDoc] = &[PortDoc { name: "u1 … un", doc: "any widths; scalars broadcast" }];
 const Y_ELEMENTWISE: &[PortDoc] = &[PortDoc { name: "y", doc: "width of the widest input" }];
@@ -60,7 +61,7 @@ pub const TYPES: &[BlockType] = &[
         name: "abs",
         category: "math",
         summary: "Absolute value, elementwise.",
-        doc: "y = |u|.",
+        doc: concat!("y = |u|; pieces −u and u either side of 0.", crate::nonlinear::piecewise_doc!()),
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[SAMPLE_TIME_INHERITED],
@@ -70,7 +71,10 @@ pub const TYPES: &[BlockType] = &[
         name: "sign",
         category: "math",
         summary: "Signum, elementwise: -1, 0 or 1.",
-        doc: "y = sign(u), with sign(0) = 0 (as MATLAB).",
+        doc: concat!(
+            "y = sign(u), with sign(0) = 0 (as MATLAB); pieces −1 and 1 either side of 0.",
+            crate::nonlinear::piecewise_doc!()
+        ),
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[SAMPLE_TIME_INHERITED],
@@ -80,7 +84,8 @@ pub const TYPES: &[BlockType] = &[
         name: "min",
         category: "math",
         summary: "Elementwise minimum of the inputs (or of one vector's elements).",
-        doc: "y = min(u1, …, un) elementwise; with `inputs: 1`, the smallest element of u1.",
+        doc: "y = min(u1, …, un) elementwise; with `inputs: 1`, the smallest element of u1.\nModes: the selected input is chosen at major steps and frozen in minor steps; zero crossings of \
+              uj − u_selected locate where another input takes over (for the multi-input form).",
         inputs: UN,
         outputs: Y_ELEMENTWISE,
         params: &[param("inputs", Some("2"), "number of input ports"), SAMPLE_TIME_INHERITED],
@@ -90,7 +95,8 @@ pub const TYPES: &[BlockType] = &[
         name: "max",
         category: "math",
         summary: "Elementwise maximum of the inputs (or of one vector's elements).",
-        doc: "y = max(u1, …, un) elementwise; with `inputs: 1`, the largest element of u1.",
+        doc: "y = max(u1, …, un) elementwise; with `inputs: 1`, the largest element of u1.\nModes: the selected input is chosen at major steps and frozen in minor steps; zero crossings of \
+              uj − u_selected locate where another input takes over (for the multi-input form).",
         inputs: UN,
         outputs: Y_ELEMENTWISE,
         params: &[param("inputs", Some("2"), "number of input ports"), SAMPLE_TIME_INHERITED],
@@ -128,27 +134,8 @@ fn nary(p: &mut Params, n: usize, block: impl Block + 'static) -> Result<Built, 
     Ok(Built::new(block, iface.output("y", Width::Common)))
 }
 
-/// A unary elementwise function.
-struct Map(fn(f64) -> f64);
-
-impl Block for Map {
-    fn output(&mut self, io: &mut Io) {
-        for k in 0..io.output_width(0) {
-            let v = (self.0)(io.u_at(0, k));
-            io.set_at(0, k, v);
-        }
-    }
-}
-
-fn unary(p: &mut Params, f: fn(f64) -> f64) -> Result<Built, Diagnostic> {
-    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
-        .input("u", Width::Common, true)
-        .output("y", Width::Common);
-    Ok(Built::new(Map(f), iface))
-}
-
 fn build_abs(p: &mut Params) -> Result<Built, Diagnostic> {
-    unary(p, f64::abs)
+    Piecewise::new(vec![0.0], |_, r, u| if r == 0 { -u } else { u }).build(p)
 }
 
 /// sign(0) = 0, as MATLAB.
@@ -163,7 +150,16 @@ pub fn sign(v: f64) -> f64 {
 }
 
 fn build_sign(p: &mut Params) -> Result<Built, Diagnostic> {
-    unary(p, sign)
+    Piecewise::new(vec![0.0], |_, r, u| {
+        if u == 0.0 {
+            0.0
+        } else if r == 0 {
+            -1.0
+        } else {
+            1.0
+        }
+    })
+    .build(p)
 }
 
 enum Gain {
@@ -315,9 +311,16 @@ fn build_divide(p: &mut Params) -> Result<Built, Diagnostic> {
 struct Extremum {
     max: bool,
     inputs: usize,
+    /// Multi-input form: the selected input per element (the mode).
+    selected: Vec<usize>,
 }
 
 impl Block for Extremum {
+    fn set_width(&mut self, width: usize) -> Result<(), String> {
+        self.selected = vec![0; width];
+        Ok(())
+    }
+
     fn output(&mut self, io: &mut Io) {
         let pick = |a: f64, b: f64| if self.max { a.max(b) } else { a.min(b) };
         if self.inputs == 1 {
@@ -327,8 +330,37 @@ impl Block for Extremum {
             return;
         }
         for k in 0..io.output_width(0) {
-            let v = (1..self.inputs).fold(io.u_at(0, k), |a, i| pick(a, io.u_at(i, k)));
+            if io.may_switch() {
+                // The first input attaining the extremum.
+                let better = |a: f64, b: f64| if self.max { b > a } else { b < a };
+                self.selected[k] =
+                    (1..self.inputs).fold(0, |s, i| if better(io.u_at(s, k), io.u_at(i, k)) { i } else { s });
+            }
+            let v = io.u_at(self.selected[k], k);
             io.set_at(0, k, v);
+        }
+    }
+
+    fn num_zero_crossings(&self) -> usize {
+        if self.inputs == 1 { 0 } else { self.selected.len() * self.inputs }
+    }
+
+    /// uj − u_selected per element and input.
+    fn zero_crossings(&self, io: &Io, g: &mut [f64]) {
+        for (k, &s) in self.selected.iter().enumerate() {
+            for j in 0..self.inputs {
+                g[k * self.inputs + j] = io.u_at(j, k) - io.u_at(s, k);
+            }
+        }
+    }
+
+    fn crossing_direction(&self, k: usize) -> Crossing {
+        if self.selected[k / self.inputs] == k % self.inputs {
+            Crossing::Ignore
+        } else if self.max {
+            Crossing::Rising
+        } else {
+            Crossing::Falling
         }
     }
 }
@@ -339,9 +371,9 @@ fn build_extremum(p: &mut Params, max: bool) -> Result<Built, Diagnostic> {
         let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
             .input("u1", Width::Common, true)
             .output("y", Width::Fixed(1));
-        return Ok(Built::new(Extremum { max, inputs }, iface));
+        return Ok(Built::new(Extremum { max, inputs, selected: Vec::new() }, iface));
     }
-    nary(p, inputs, Extremum { max, inputs })
+    nary(p, inputs, Extremum { max, inputs, selected: vec![0] })
 }
 
 fn build_min(p: &mut Params) -> Result<Built, Diagnostic> {

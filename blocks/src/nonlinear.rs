@@ -1,16 +1,32 @@
-//! Static and slew nonlinearities: saturation, dead zone, rate limiter.
+//! Static and slew nonlinearities: saturation, dead zone, rate limiter, and
+//! [`Piecewise`], the zero-crossing machinery of elementwise blocks with
+//! corners (saturation, dead zone, abs, sign).
 
 use crate::{SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, param};
 use ctlgraph_core::registry::{BlockType, Built};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+
+/// What every piecewise block's doc says about its modes.
+macro_rules! piecewise_doc {
+    () => {
+        "\nModes (Simulink's): each element's piece is chosen at major steps and frozen in the solver's \
+         minor steps, so each side of a corner integrates its own smooth formula; zero crossings of u − \
+         breakpoint end the step exactly at the corner. With `zero_crossing: false` the block is a plain \
+         function."
+    };
+}
+pub(crate) use piecewise_doc;
 
 pub const TYPES: &[BlockType] = &[
     BlockType {
         name: "saturation",
         category: "nonlinear",
         summary: "Limits a signal to [lower, upper].",
-        doc: "y = min(max(u, lower), upper), elementwise. NaN in, NaN out (the run then stops).\n\
-              Bounds: lower <= y <= upper always.",
+        doc: concat!(
+            "y = min(max(u, lower), upper), elementwise. NaN in, NaN out (the run then stops).",
+            piecewise_doc!(),
+            "\nBounds: lower <= y <= upper at major steps."
+        ),
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
@@ -24,7 +40,10 @@ pub const TYPES: &[BlockType] = &[
         name: "dead_zone",
         category: "nonlinear",
         summary: "Zero output inside [start, end], shifted input outside.",
-        doc: "y = 0 for start <= u <= end; y = u − end above; y = u − start below (Simulink's Dead Zone).",
+        doc: concat!(
+            "y = 0 for start <= u <= end; y = u − end above; y = u − start below (Simulink's Dead Zone).",
+            piecewise_doc!()
+        ),
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
@@ -57,24 +76,59 @@ pub const TYPES: &[BlockType] = &[
     },
 ];
 
-fn elementwise(p: &mut Params, block: impl Block + 'static) -> Result<Built, Diagnostic> {
-    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
-        .input("u", Width::Common, true)
-        .output("y", Width::Common);
-    Ok(Built::new(block, iface))
+/// An elementwise function made of smooth pieces between sorted
+/// breakpoints. Each element's piece (its mode) is chosen at major steps —
+/// piece r lies between breakpoint r − 1 and r, a breakpoint itself
+/// belonging to the piece below — and frozen in minor steps; the zero
+/// crossings are u − breakpoint for every element and breakpoint.
+pub struct Piecewise {
+    breaks: Vec<f64>,
+    /// Piece `r` at input `u`, given the breakpoints.
+    piece: fn(&[f64], usize, f64) -> f64,
+    modes: Vec<usize>,
 }
 
-/// Clamps to [lower, upper].
-pub struct Saturation {
-    pub lower: f64,
-    pub upper: f64,
+impl Piecewise {
+    pub fn new(breaks: Vec<f64>, piece: fn(&[f64], usize, f64) -> f64) -> Self {
+        Piecewise { breaks, piece, modes: vec![0] }
+    }
+
+    /// Builds the block with one input `u` and output `y` of any width.
+    pub fn build(self, p: &mut Params) -> Result<Built, Diagnostic> {
+        let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+            .input("u", Width::Common, true)
+            .output("y", Width::Common);
+        Ok(Built::new(self, iface))
+    }
 }
 
-impl Block for Saturation {
+impl Block for Piecewise {
+    fn set_width(&mut self, width: usize) -> Result<(), String> {
+        self.modes = vec![0; width];
+        Ok(())
+    }
+
     fn output(&mut self, io: &mut Io) {
         for k in 0..io.output_width(0) {
-            let v = io.u_at(0, k).max(self.lower).min(self.upper);
+            let u = io.u_at(0, k);
+            if io.may_switch() {
+                self.modes[k] = self.breaks.iter().filter(|&&b| u > b).count();
+            }
+            let v = (self.piece)(&self.breaks, self.modes[k], u);
             io.set_at(0, k, v);
+        }
+    }
+
+    fn num_zero_crossings(&self) -> usize {
+        self.modes.len() * self.breaks.len()
+    }
+
+    fn zero_crossings(&self, io: &Io, g: &mut [f64]) {
+        let m = self.breaks.len();
+        for k in 0..self.modes.len() {
+            for (j, b) in self.breaks.iter().enumerate() {
+                g[k * m + j] = io.u_at(0, k) - b;
+            }
         }
     }
 }
@@ -88,35 +142,28 @@ pub(crate) fn limits(p: &mut Params, lo: &str, hi: &str, defaults: (f64, f64)) -
     Ok((lower, upper))
 }
 
+/// Saturation: below `lower`, between, above `upper`.
+pub fn saturation(lower: f64, upper: f64) -> Piecewise {
+    Piecewise::new(vec![lower, upper], |b, r, u| match r {
+        0 => b[0],
+        1 => u,
+        _ => b[1],
+    })
+}
+
 fn build_saturation(p: &mut Params) -> Result<Built, Diagnostic> {
     let (lower, upper) = limits(p, "lower", "upper", (-1.0, 1.0))?;
-    elementwise(p, Saturation { lower, upper })
-}
-
-struct DeadZone {
-    start: f64,
-    end: f64,
-}
-
-impl Block for DeadZone {
-    fn output(&mut self, io: &mut Io) {
-        for k in 0..io.output_width(0) {
-            let u = io.u_at(0, k);
-            let v = if u > self.end {
-                u - self.end
-            } else if u < self.start {
-                u - self.start
-            } else {
-                0.0
-            };
-            io.set_at(0, k, v);
-        }
-    }
+    saturation(lower, upper).build(p)
 }
 
 fn build_dead_zone(p: &mut Params) -> Result<Built, Diagnostic> {
     let (start, end) = limits(p, "start", "end", (-0.5, 0.5))?;
-    elementwise(p, DeadZone { start, end })
+    Piecewise::new(vec![start, end], |b, r, u| match r {
+        0 => u - b[0],
+        1 => 0.0,
+        _ => u - b[1],
+    })
+    .build(p)
 }
 
 /// Slew-rate limiter; see the type's doc for the equation.

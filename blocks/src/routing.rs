@@ -50,7 +50,9 @@ pub const TYPES: &[BlockType] = &[
         category: "routing",
         summary: "Passes u1 or u2 depending on a control signal.",
         doc: "y = u1 if control passes the criterion, else u2. Criteria: `>=` (control >= threshold), \
-              `>` (control > threshold), `!=0` (control ≠ 0). Ports in Simulink's order: u1, control, u2.",
+              `>` (control > threshold), `!=0` (control ≠ 0). Ports in Simulink's order: u1, control, u2.\n\
+              Modes: the passing input is chosen at major steps and frozen in minor steps; the zero \
+              crossing of control − threshold (control for `!=0`) ends the step where it switches.",
         inputs: &[
             PortDoc { name: "u1", doc: "passed when the criterion holds" },
             PortDoc { name: "control", doc: "scalar" },
@@ -208,21 +210,37 @@ enum Criterion {
 struct Switch {
     threshold: f64,
     criterion: Criterion,
+    /// The mode: whether u1 passes.
+    first: bool,
 }
 
 impl Block for Switch {
     fn output(&mut self, io: &mut Io) {
-        let c = io.u(1);
-        let first = match self.criterion {
-            Criterion::AtLeast => c >= self.threshold,
-            Criterion::Above => c > self.threshold,
-            Criterion::NonZero => c != 0.0,
-        };
-        let port = if first { 0 } else { 2 };
+        if io.may_switch() {
+            let c = io.u(1);
+            self.first = match self.criterion {
+                Criterion::AtLeast => c >= self.threshold,
+                Criterion::Above => c > self.threshold,
+                Criterion::NonZero => c != 0.0,
+            };
+        }
+        let port = if self.first { 0 } else { 2 };
         for k in 0..io.output_width(0) {
             let v = io.u_at(port, k);
             io.set_at(0, k, v);
         }
+    }
+
+    fn num_zero_crossings(&self) -> usize {
+        1
+    }
+
+    /// The control input against its threshold (against 0 for `!=0`).
+    fn zero_crossings(&self, io: &Io, g: &mut [f64]) {
+        g[0] = match self.criterion {
+            Criterion::NonZero => io.u(1),
+            _ => io.u(1) - self.threshold,
+        };
     }
 }
 
@@ -238,5 +256,5 @@ fn build_switch(p: &mut Params) -> Result<Built, Diagnostic> {
         .input("control", Width::Fixed(1), true)
         .input("u2", Width::Common, true)
         .output("y", Width::Common);
-    Ok(Built::new(Switch { threshold, criterion }, iface))
+    Ok(Built::new(Switch { threshold, criterion, first: true }, iface))
 }

@@ -158,6 +158,7 @@ pub struct Io<'a> {
     /// This block's continuous states (empty for blocks without any).
     pub x: &'a [f64],
     left_limit: bool,
+    major: bool,
     frozen: bool,
     signals: &'a mut [f64],
     inputs: &'a [Port],
@@ -173,13 +174,22 @@ impl<'a> Io<'a> {
         inputs: &'a [Port],
         outputs: &'a [Port],
     ) -> Self {
-        Io { t, x, left_limit, frozen: false, signals, inputs, outputs }
+        Io { t, x, left_limit, major: true, frozen: false, signals, inputs, outputs }
     }
 
-    /// Freezes modes (a solver minor step with zero-crossing detection).
-    pub fn with_frozen_modes(mut self, frozen: bool) -> Self {
+    /// Marks the call as a solver stage (minor step), with the block's
+    /// modes frozen when its zero crossings are watched.
+    pub fn in_minor_step(mut self, frozen: bool) -> Self {
+        self.major = false;
         self.frozen = frozen;
         self
+    }
+
+    /// Whether this is a major step (the pass whose outputs are recorded),
+    /// not a solver stage.
+    #[inline]
+    pub fn is_major(&self) -> bool {
+        self.major
     }
 
     /// Whether a block with modes may switch mode now: at major steps, and
@@ -300,6 +310,12 @@ pub trait Block: Send {
         0
     }
 
+    /// Whether [`Block::major_step`] must run (by default: when the block
+    /// has zero crossings).
+    fn needs_major_step(&self) -> bool {
+        self.num_zero_crossings() > 0
+    }
+
     /// Writes the zero-crossing functions at `io.t`: continuous in time while
     /// the block's mode is frozen; a sign change accepted by
     /// [`Block::crossing_direction`] is an event.
@@ -310,9 +326,16 @@ pub trait Block: Send {
         Crossing::Either
     }
 
-    /// Runs at every major step after all outputs, for blocks with zero
-    /// crossings: the block may reset its continuous states `x` (`io.x` is
-    /// empty here). Returns whether anything changed, so that outputs are
+    /// Function `k`'s crossing ended the step: the coming major step is at
+    /// the crossing. A block whose reaction depends on the side of zero
+    /// (an edge-triggered reset) must not re-derive it from values there,
+    /// which lie within a few ulps of zero on either side.
+    fn crossing_located(&mut self, _k: usize) {}
+
+    /// Runs at every major step after all outputs, for continuous blocks
+    /// that [`Block::needs_major_step`]: the block may switch modes that
+    /// depend on inputs without feedthrough, and reset its continuous states
+    /// `x` (`io.x` is empty here). Returns whether anything changed, so that outputs are
     /// computed again with the new states.
     fn major_step(&mut self, _io: &Io, _x: &mut [f64]) -> bool {
         false

@@ -8,8 +8,9 @@
 //!
 //! Chattering (Simulink's "consecutive zero crossings"): more than
 //! [`MAX_CONSECUTIVE_EVENTS`] events each within 1e-12·max(1, |t|) of the
-//! last stop the run, or with `zero_crossing: adaptive` turn that block's
-//! detection off with a warning. Either way a Zeno model cannot hang.
+//! last, or a run of ever closer events (a Zeno point), stop the run, or
+//! with `zero_crossing: adaptive` turn that block's detection off with a
+//! warning. Either way a Zeno model cannot hang.
 
 use super::{Minor, SimError, io_for};
 use crate::compile::Model;
@@ -23,6 +24,28 @@ pub const MAX_CONSECUTIVE_EVENTS: u32 = 1000;
 
 /// Root-finding iterations per crossing before settling for the bracket.
 const MAX_ITERATIONS: usize = 200;
+
+/// How far after an event, in location tolerances, a function that fired
+/// there is probed for the side it leaves to: far enough that the
+/// location error is outgrown when the function leaves at 1/16 of the
+/// speed it arrived with, well inside the chattering window.
+const PROBE: f64 = 16.0;
+
+/// Two events closer than this (relative to max(1, |t|)) are consecutive.
+const CONSECUTIVE: f64 = 1e-12;
+
+/// A Zeno point: this many events in a row, each closer to the last than
+/// the one before and closer than `ZENO_SCALE`·max(1, |t|). Geometric
+/// accumulation (a ball bouncing with restitution 0.8 has 47 impacts from
+/// 1e-9 s apart to where they can no longer be told apart) outruns the
+/// consecutive-events rule, which catches only the final pile-up.
+const ZENO_EVENTS: u32 = 20;
+const ZENO_SCALE: f64 = 1e-9;
+
+/// The width to which a crossing near time `t` is located: a few ulps.
+fn tolerance(t: f64) -> f64 {
+    8.0 * f64::EPSILON * t.abs().max(1.0)
+}
 
 /// The watched zero-crossing functions of a model and their state.
 pub(crate) struct Watch {
@@ -46,8 +69,17 @@ pub(crate) struct Watch {
     pub events: u64,
     consecutive: u32,
     last_event: f64,
+    /// Events in a row each closer to the last than the one before.
+    shrinking: u32,
+    last_interval: f64,
     /// Entry of `blocks` whose crossing ended the last step.
     last_block: usize,
+    /// Per function: whether it fired at the event that ended the last
+    /// step (then `restart`: whether it fired at the step's start).
+    fired: Vec<bool>,
+    restart: Vec<bool>,
+    /// Per function: the side it started the step on, when it crossed.
+    start_sign: Vec<f64>,
     pub warnings: Vec<String>,
 }
 
@@ -58,7 +90,7 @@ impl Watch {
         let mut n = 0;
         for &i in continuous {
             let count = model.blocks[i].num_zero_crossings();
-            if count > 0 {
+            if model.blocks[i].needs_major_step() {
                 blocks.push(i);
                 ranges.push(n..n + count);
                 n += count;
@@ -77,7 +109,12 @@ impl Watch {
             events: 0,
             consecutive: 0,
             last_event: f64::NEG_INFINITY,
+            shrinking: 0,
+            last_interval: f64::INFINITY,
             last_block: 0,
+            fired: vec![false; n],
+            restart: vec![false; n],
+            start_sign: vec![0.0; n],
             warnings: Vec::new(),
         }
     }
@@ -95,6 +132,10 @@ impl Watch {
         self.events = 0;
         self.consecutive = 0;
         self.last_event = f64::NEG_INFINITY;
+        self.shrinking = 0;
+        self.last_interval = f64::INFINITY;
+        self.fired.iter_mut().for_each(|f| *f = false);
+        self.restart.iter_mut().for_each(|f| *f = false);
         self.warnings.clear();
     }
 
@@ -117,9 +158,18 @@ impl Watch {
     }
 
     /// After a step from `t0` to `t1` that ended in state `x`: the time of
-    /// the first accepted crossing inside it, with `x` moved there, or
-    /// `None` when no watched function changed sign.
+    /// the first accepted crossing inside it, with `x` moved there; or
+    /// `None` when no watched function changed sign. [`Watch::fired`] then
+    /// lists the functions that crossed there.
+    ///
+    /// A function that crossed at `t0` sits within a few ulps of zero there,
+    /// on either side; what counts is the side it leaves to (a bouncing
+    /// ball's height is −1e-14 at the impact but rising). Its starting sign
+    /// is therefore read just after `t0` (CVODE does the same), so that it
+    /// leaving and coming back within one step is still an event.
     pub fn locate(&mut self, sys: &mut Minor, integ: &mut Integrator, t0: f64, t1: f64, x: &mut [f64]) -> Option<f64> {
+        std::mem::swap(&mut self.restart, &mut self.fired);
+        self.fired.iter_mut().for_each(|f| *f = false);
         if !self.active.iter().any(|&a| a) || t1 <= t0 {
             return None;
         }
@@ -131,31 +181,63 @@ impl Watch {
         }
         // The earliest crossing: each later candidate is searched only up
         // to the earliest found so far.
-        let mut first: Option<(f64, usize)> = None;
+        let mut first: Option<f64> = None;
         for b in 0..self.blocks.len() {
             if !self.active[b] {
                 continue;
             }
             for k in self.ranges[b].clone() {
-                let s = self.sign[k];
+                let mut start = (t0, self.g0[k]);
+                let mut s = self.sign[k];
+                if self.restart[k] {
+                    let t = t0 + (PROBE * tolerance(t1)).min(0.5 * (t1 - t0));
+                    let g = self.value(sys, integ, x, b, k, t);
+                    if g != 0.0 {
+                        (start, s) = ((t, g), g.signum());
+                    }
+                }
+                self.start_sign[k] = 0.0;
                 let direction = sys.model.blocks[self.blocks[b]].crossing_direction(k - self.ranges[b].start);
                 if s == 0.0 || self.g1[k] * s >= 0.0 || !direction.accepts(s) {
                     continue;
                 }
-                let end = first.map_or(t1, |(t, _)| t);
+                self.start_sign[k] = s;
+                let end = first.unwrap_or(t1);
                 let g_end = if end == t1 { self.g1[k] } else { self.value(sys, integ, x, b, k, end) };
-                if g_end * s < 0.0 {
-                    first = Some((self.root(sys, integ, x, b, k, t0, end, g_end), b));
+                if g_end * s < 0.0 && end > start.0 {
+                    first = Some(self.root(sys, integ, x, b, k, s, start, (end, g_end)));
                 }
             }
         }
-        let (t, b) = first?;
+        let t = first?;
         if !x.is_empty() {
             integ.interpolate(sys, t, x, &mut self.x_trial);
             x.copy_from_slice(&self.x_trial);
         }
-        self.last_block = b;
+        // Every candidate that has crossed by t fired there.
+        sys.outputs(t, x);
+        for (b, &i) in self.blocks.iter().enumerate() {
+            if !self.active[b] {
+                continue;
+            }
+            sys.zero_crossings(i, t, x, &mut self.g[self.ranges[b].clone()]);
+            for k in self.ranges[b].clone() {
+                if self.start_sign[k] != 0.0 && self.g[k] * self.start_sign[k] <= 0.0 {
+                    self.fired[k] = true;
+                    self.last_block = b;
+                }
+            }
+        }
         Some(t)
+    }
+
+    /// The (model block, function of the block) pairs that fired at the
+    /// event [`Watch::locate`] found.
+    pub fn fired(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.blocks
+            .iter()
+            .zip(&self.ranges)
+            .flat_map(move |(&i, r)| r.clone().filter(|&k| self.fired[k]).map(move |k| (i, k - r.start)))
     }
 
     /// Function `k` (of block entry `b`) at time `t` inside the last step.
@@ -171,8 +253,10 @@ impl Watch {
         self.g[k]
     }
 
-    /// The Illinois method on s·g_k over [t0, t1], where s·g_k(t1) < 0:
-    /// returns the right end of a bracket no wider than a few ulps of t.
+    /// The Illinois method on s·g_k between `lo` and `hi` (times and values
+    /// of g_k), where s·g_k(hi) < 0: returns the right end of a bracket no
+    /// wider than [`tolerance`]. A start that is not strictly on the `s`
+    /// side (g exactly 0) falls back to bisection until one is.
     #[allow(clippy::too_many_arguments)]
     fn root(
         &mut self,
@@ -181,14 +265,13 @@ impl Watch {
         x1: &[f64],
         b: usize,
         k: usize,
-        t0: f64,
-        t1: f64,
-        g1: f64,
+        s: f64,
+        lo: (f64, f64),
+        hi: (f64, f64),
     ) -> f64 {
-        let s = self.sign[k];
-        let (mut lo, mut hi) = (t0, t1);
-        let (mut g_lo, mut g_hi) = (s * self.g0[k], s * g1);
-        let tol = 8.0 * f64::EPSILON * t1.abs().max(1.0);
+        let ((mut lo, g_lo), (mut hi, g_hi)) = (lo, hi);
+        let (mut g_lo, mut g_hi) = (s * g_lo, s * g_hi);
+        let tol = tolerance(hi);
         let mut last_moved = 0i8;
         for _ in 0..MAX_ITERATIONS {
             if hi - lo <= tol {
@@ -221,27 +304,31 @@ impl Watch {
     /// model block whose modes must no longer be frozen.
     pub fn count_event(&mut self, t: f64, model: &Model) -> Result<Option<usize>, SimError> {
         self.events += 1;
-        if t - self.last_event <= 1e-12 * t.abs().max(1.0) {
-            self.consecutive += 1;
-        } else {
-            self.consecutive = 0;
-        }
+        let scale = t.abs().max(1.0);
+        let interval = t - self.last_event;
+        self.consecutive = if interval <= CONSECUTIVE * scale { self.consecutive + 1 } else { 0 };
+        self.shrinking =
+            if interval <= ZENO_SCALE * scale && interval < self.last_interval { self.shrinking + 1 } else { 0 };
         self.last_event = t;
-        if self.consecutive < MAX_CONSECUTIVE_EVENTS {
+        self.last_interval = interval;
+        let what = if self.consecutive >= MAX_CONSECUTIVE_EVENTS {
+            format!("{} zero crossings in a row at nearly the same time", self.consecutive)
+        } else if self.shrinking >= ZENO_EVENTS {
+            format!("{} zero crossings in a row, ever closer (a Zeno point)", self.shrinking)
+        } else {
             return Ok(None);
-        }
+        };
         let b = self.last_block;
         let block = self.blocks[b];
         let name = model.meta[block].name.clone();
         if self.mode != ZeroCrossing::Adaptive {
-            return Err(SimError::Chattering { t, block: name, events: self.consecutive });
+            return Err(SimError::Chattering { t, block: name, what });
         }
         self.active[b] = false;
         self.consecutive = 0;
-        self.warnings.push(format!(
-            "t = {t}: block `{name}` chattered ({MAX_CONSECUTIVE_EVENTS} zero crossings in a row); \
-             its crossings are ignored from here on"
-        ));
+        self.shrinking = 0;
+        self.warnings
+            .push(format!("t = {t}: block `{name}` chattered ({what}); its crossings are ignored from here on"));
         Ok(Some(block))
     }
 }

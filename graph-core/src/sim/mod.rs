@@ -38,7 +38,7 @@ pub enum SimError {
     Chattering {
         t: f64,
         block: String,
-        events: u32,
+        what: String,
     },
 }
 
@@ -49,9 +49,9 @@ impl fmt::Display for SimError {
                 write!(f, "t = {t}: block `{block}`: {what} is {value}")
             }
             SimError::Solver { t, error } => write!(f, "t = {t}: solver: {error}"),
-            SimError::Chattering { t, block, events } => write!(
+            SimError::Chattering { t, block, what } => write!(
                 f,
-                "t = {t}: block `{block}`: {events} zero crossings in a row at nearly the same time (chattering); \
+                "t = {t}: block `{block}` chatters: {what}; \
                  hint: `solver: {{ zero_crossing: adaptive }}` ignores a chattering block's crossings, \
                  or reformulate (add hysteresis, a boundary layer)"
             ),
@@ -280,7 +280,8 @@ impl Simulator {
         let mut changed = false;
         for &i in &self.watch.blocks {
             let slot = &m.slots[i];
-            let io = io_for(slot, self.t, false, &[], &mut self.signals, &m.in_ports, &m.out_ports);
+            let (inputs, outputs) = (&m.in_ports[slot.inputs.clone()], &m.out_ports[slot.outputs.clone()]);
+            let io = Io::new(self.t, false, &[], &mut self.signals, inputs, outputs);
             changed |= m.blocks[i].major_step(&io, &mut self.x[slot.states.clone()]);
         }
         changed
@@ -311,6 +312,9 @@ impl Simulator {
         let event = self.watch.locate(&mut sys, &mut self.integ, t0, t_new, &mut self.x);
         if let Some(t_event) = event {
             t_new = t_event;
+            for (block, k) in self.watch.fired() {
+                self.model.blocks[block].crossing_located(k);
+            }
             self.integ.invalidate();
             if let Some(block) = self.watch.count_event(t_event, &self.model)? {
                 self.frozen[block] = false;
@@ -423,7 +427,7 @@ impl Minor<'_> {
         for &i in self.continuous {
             let meta = &m.slots[i];
             let mut io =
-                io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).with_frozen_modes(self.frozen[i]);
+                io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(self.frozen[i]);
             m.blocks[i].output(&mut io);
         }
     }
@@ -434,7 +438,7 @@ impl Minor<'_> {
     fn zero_crossings(&mut self, i: usize, t: f64, x: &[f64], g: &mut [f64]) {
         let m = &mut *self.model;
         let io = io_for(&m.slots[i], t, t >= self.t_end, x, self.signals, &m.in_ports, &m.out_ports)
-            .with_frozen_modes(self.frozen[i]);
+            .in_minor_step(self.frozen[i]);
         m.blocks[i].zero_crossings(&io, g);
     }
 }
@@ -446,8 +450,7 @@ impl OdeSystem for Minor<'_> {
         let left = t >= self.t_end;
         for &i in self.stateful {
             let meta = &m.slots[i];
-            let io =
-                io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).with_frozen_modes(self.frozen[i]);
+            let io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(self.frozen[i]);
             m.blocks[i].derivatives(&io, &mut dx[meta.states.clone()]);
         }
     }

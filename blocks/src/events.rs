@@ -1,0 +1,223 @@
+//! Switching blocks driven by zero crossings: the hysteretic `relay` and
+//! `hit_crossing`, and [`Trigger`], the edge logic they share with the
+//! integrator's reset.
+
+use crate::{SAMPLE_TIME_INHERITED, U_SCALAR, Y_SCALAR, param};
+use ctlgraph_core::registry::{BlockType, Built};
+use ctlgraph_core::{Block, Crossing, Diagnostic, Interface, Io, Params, SampleTime, Width};
+
+pub const TYPES: &[BlockType] = &[
+    BlockType {
+        name: "relay",
+        category: "nonlinear",
+        summary: "Two-level switch with hysteresis (Simulink's Relay).",
+        doc: "y = on_value while on, off_value while off. Off → on when u >= on_threshold; on → off when \
+              u <= off_threshold; otherwise the state holds (hysteresis band [off_threshold, on_threshold]). \
+              The state switches only at major steps; with zero-crossing detection the step ends exactly \
+              where u reaches the threshold that applies (u − on_threshold rising while off, u − \
+              off_threshold falling while on), so a thermostat switches at its thresholds, not a step \
+              later. Starts off unless `initial: on`.\n\
+              Bounds: y is on_value or off_value.",
+        inputs: U_SCALAR,
+        outputs: Y_SCALAR,
+        params: &[
+            param("on_threshold", Some("0.5"), "switch-on point"),
+            param("off_threshold", Some("-0.5"), "switch-off point, <= on_threshold"),
+            param("on_value", Some("1"), "output while on"),
+            param("off_value", Some("0"), "output while off"),
+            param("initial", Some("off"), "off or on"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_relay,
+    },
+    BlockType {
+        name: "hit_crossing",
+        category: "nonlinear",
+        summary: "Outputs 1 at the step where its input crosses a level (Simulink's Hit Crossing).",
+        doc: "y = 1 at the major step where u has crossed `level` in the given direction since the last \
+              major step, 0 elsewhere. With zero-crossing detection that step is the crossing itself, \
+              located to a few ulps of t; the block also forces the step to end there, so a crossing is \
+              hit exactly even when nothing else depends on it. Directions as the integrator's reset: \
+              rising (from < level to >= level, or from level to above), falling, either.",
+        inputs: U_SCALAR,
+        outputs: Y_SCALAR,
+        params: &[
+            param("level", Some("0"), "the level watched"),
+            param("direction", Some("either"), "rising, falling or either"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_hit_crossing,
+    },
+];
+
+/// What makes a signal fire: an edge through zero, or a nonzero level.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Trigger {
+    /// From < 0 to >= 0, or from 0 to > 0.
+    Rising,
+    /// From > 0 to <= 0, or from 0 to < 0.
+    Falling,
+    Either,
+    /// While nonzero.
+    Level,
+}
+
+impl Trigger {
+    /// Whether the signal fires going from `before` (NaN: no history) to `now`.
+    pub fn fired(self, before: f64, now: f64) -> bool {
+        let rising = (before < 0.0 && now >= 0.0) || (before == 0.0 && now > 0.0);
+        let falling = (before > 0.0 && now <= 0.0) || (before == 0.0 && now < 0.0);
+        match self {
+            Trigger::Rising => rising,
+            Trigger::Falling => falling,
+            Trigger::Either => rising || falling,
+            Trigger::Level => now != 0.0,
+        }
+    }
+
+    /// The zero-crossing direction that locates it.
+    pub fn direction(self) -> Crossing {
+        match self {
+            Trigger::Rising => Crossing::Rising,
+            Trigger::Falling => Crossing::Falling,
+            Trigger::Either | Trigger::Level => Crossing::Either,
+        }
+    }
+}
+
+/// Relay with hysteresis; see the type's doc.
+pub struct Relay {
+    pub on_threshold: f64,
+    pub off_threshold: f64,
+    pub on_value: f64,
+    pub off_value: f64,
+    pub initial_on: bool,
+    /// The state committed at the last major step.
+    on: bool,
+    /// The state this major step's output used, committed by `update`.
+    next: bool,
+}
+
+impl Relay {
+    pub fn new(on_threshold: f64, off_threshold: f64, on_value: f64, off_value: f64, initial_on: bool) -> Self {
+        Relay { on_threshold, off_threshold, on_value, off_value, initial_on, on: initial_on, next: initial_on }
+    }
+
+    fn switched(&self, u: f64) -> bool {
+        if self.on { u > self.off_threshold } else { u >= self.on_threshold }
+    }
+}
+
+impl Block for Relay {
+    fn initialize(&mut self, _x0: &mut [f64]) {
+        self.on = self.initial_on;
+        self.next = self.initial_on;
+    }
+
+    fn output(&mut self, io: &mut Io) {
+        let on = if io.may_switch() { self.switched(io.u(0)) } else { self.on };
+        if io.is_major() {
+            self.next = on;
+        }
+        io.set(0, if on { self.on_value } else { self.off_value });
+    }
+
+    fn update(&mut self, _io: &mut Io) {
+        self.on = self.next;
+    }
+
+    fn num_zero_crossings(&self) -> usize {
+        2
+    }
+
+    fn zero_crossings(&self, io: &Io, g: &mut [f64]) {
+        g[0] = io.u(0) - self.on_threshold;
+        g[1] = io.u(0) - self.off_threshold;
+    }
+
+    fn crossing_direction(&self, k: usize) -> Crossing {
+        match (k, self.on) {
+            (0, false) => Crossing::Rising,
+            (1, true) => Crossing::Falling,
+            _ => Crossing::Ignore,
+        }
+    }
+}
+
+fn build_relay(p: &mut Params) -> Result<Built, Diagnostic> {
+    let (off, on) = crate::nonlinear::limits(p, "off_threshold", "on_threshold", (-0.5, 0.5))?;
+    let on_value = p.number_or("on_value", 1.0)?;
+    let off_value = p.number_or("off_value", 0.0)?;
+    let initial_on = p.choice("initial", &["off", "on"])? == "on";
+    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        .input("u", Width::Fixed(1), true)
+        .output("y", Width::Fixed(1));
+    Ok(Built::new(Relay::new(on, off, on_value, off_value, initial_on), iface))
+}
+
+/// Hit crossing; see the type's doc.
+pub struct HitCrossing {
+    level: f64,
+    trigger: Trigger,
+    /// u − level at the last major step (NaN before the first).
+    last: f64,
+    /// This major step's u − level, committed by `update`.
+    current: f64,
+    /// The output of the last major step, held in minor steps.
+    hit: f64,
+    /// The simulator located the crossing: this major step is the hit.
+    located: bool,
+}
+
+impl Block for HitCrossing {
+    fn initialize(&mut self, _x0: &mut [f64]) {
+        self.last = f64::NAN;
+        self.current = f64::NAN;
+        self.hit = 0.0;
+        self.located = false;
+    }
+
+    fn output(&mut self, io: &mut Io) {
+        if io.is_major() {
+            self.current = io.u(0) - self.level;
+            let hit = self.located || self.trigger.fired(self.last, self.current);
+            self.hit = if hit { 1.0 } else { 0.0 };
+        }
+        io.set(0, self.hit);
+    }
+
+    fn update(&mut self, _io: &mut Io) {
+        self.last = self.current;
+        self.located = false;
+    }
+
+    fn num_zero_crossings(&self) -> usize {
+        1
+    }
+
+    fn zero_crossings(&self, io: &Io, g: &mut [f64]) {
+        g[0] = io.u(0) - self.level;
+    }
+
+    fn crossing_located(&mut self, _k: usize) {
+        self.located = true;
+    }
+
+    fn crossing_direction(&self, _k: usize) -> Crossing {
+        self.trigger.direction()
+    }
+}
+
+fn build_hit_crossing(p: &mut Params) -> Result<Built, Diagnostic> {
+    let level = p.number_or("level", 0.0)?;
+    let trigger = match p.choice("direction", &["either", "rising", "falling"])? {
+        "rising" => Trigger::Rising,
+        "falling" => Trigger::Falling,
+        _ => Trigger::Either,
+    };
+    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        .input("u", Width::Fixed(1), true)
+        .output("y", Width::Fixed(1));
+    let block = HitCrossing { level, trigger, last: f64::NAN, current: f64::NAN, hit: 0.0, located: false };
+    Ok(Built::new(block, iface))
+}
