@@ -1,7 +1,7 @@
 //! Discrete-time dynamics: discrete transfer function, unit delay,
 //! zero-order hold. They run at their sample hits and hold in between.
 
-use crate::continuous::{initial_vector, lti_error};
+use crate::continuous::lti_error;
 use crate::{SAMPLE_TIME_REQUIRED, U_ANY, U_SCALAR, Y_SAME, Y_SCALAR, param};
 use ctlgraph_core::registry::{BlockType, Built};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
@@ -86,35 +86,8 @@ fn build_dtf(p: &mut Params) -> Result<Built, Diagnostic> {
     Ok(Built::new(DiscreteLti::new(ss), iface))
 }
 
-struct UnitDelay {
-    initial: Vec<f64>,
-    x: Vec<f64>,
-}
-
-impl Block for UnitDelay {
-    fn set_width(&mut self, width: usize) -> Result<(), String> {
-        self.initial = initial_vector(&self.initial, width)?;
-        self.x = self.initial.clone();
-        Ok(())
-    }
-    fn initialize(&mut self, _x0: &mut [f64]) {
-        self.x.copy_from_slice(&self.initial);
-    }
-    fn output(&mut self, io: &mut Io) {
-        io.output(0).copy_from_slice(&self.x);
-    }
-    fn update(&mut self, io: &mut Io) {
-        for k in 0..self.x.len() {
-            self.x[k] = io.u_at(0, k);
-        }
-    }
-}
-
 fn build_unit_delay(p: &mut Params) -> Result<Built, Diagnostic> {
-    let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
-    let st = p.discrete_sample_time()?;
-    let iface = Interface::new(st).input("u", Width::Common, false).output("y", Width::Common);
-    Ok(Built::new(UnitDelay { initial, x: Vec::new() }, iface))
+    crate::delay::build_delay_of(p, 1)
 }
 
 struct Hold;

@@ -187,7 +187,9 @@ impl Block for HitCrossing {
     }
 
     fn update(&mut self, _io: &mut Io) {
-        self.last = self.current;
+        // A located crossing leaves u − level within ulps of zero, on either
+        // side: no edge may be read from that sample.
+        self.last = if self.located { f64::NAN } else { self.current };
         self.located = false;
     }
 

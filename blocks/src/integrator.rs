@@ -222,7 +222,9 @@ impl Block for Integrator {
                 }
                 changed = true;
             }
-            self.last_reset = now;
+            // A located crossing leaves the input within ulps of zero, on
+            // either side: no edge may be read from that sample.
+            self.last_reset = if self.located { f64::NAN } else { now };
             self.located = false;
         }
         if self.limited {

@@ -7,6 +7,7 @@ use ctlgraph_core::registry::{ParamDoc, PortDoc, Registry};
 
 pub mod adrc;
 pub mod continuous;
+pub mod delay;
 pub mod discrete;
 pub mod estimation;
 pub mod events;
@@ -35,6 +36,7 @@ pub fn registry() -> Registry {
         nonlinear::TYPES,
         continuous::TYPES,
         integrator::TYPES,
+        delay::TYPES,
         events::TYPES,
         discrete::TYPES,
         pid::TYPES,

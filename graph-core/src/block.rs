@@ -326,6 +326,12 @@ pub trait Block: Send {
         Crossing::Either
     }
 
+    /// Why the block's output became NaN at run time (a buffer limit, say),
+    /// asked when the run stops on a non-finite value.
+    fn diagnose(&self) -> Option<String> {
+        None
+    }
+
     /// Function `k`'s crossing ended the step: the coming major step is at
     /// the crossing. A block whose reaction depends on the side of zero
     /// (an edge-triggered reset) must not re-derive it from values there,

@@ -255,8 +255,9 @@ impl Watch {
 
     /// The Illinois method on s·g_k between `lo` and `hi` (times and values
     /// of g_k), where s·g_k(hi) < 0: returns the right end of a bracket no
-    /// wider than [`tolerance`]. A start that is not strictly on the `s`
-    /// side (g exactly 0) falls back to bisection until one is.
+    /// wider than [`tolerance`], where s·g_k is still strictly negative. A
+    /// start that is not strictly on the `s` side (g exactly 0) falls back
+    /// to bisection until one is.
     #[allow(clippy::too_many_arguments)]
     fn root(
         &mut self,
@@ -280,7 +281,9 @@ impl Watch {
             let secant = if g_lo > 0.0 { hi - g_hi * (hi - lo) / (g_hi - g_lo) } else { f64::NAN };
             let c = if secant > lo && secant < hi { secant } else { 0.5 * (lo + hi) };
             let gc = s * self.value(sys, integ, x1, b, k, c);
-            if gc > 0.0 {
+            // `hi` stays strictly past zero, so blocks that switch by
+            // comparing their input with the same level see the new side.
+            if gc >= 0.0 {
                 lo = c;
                 g_lo = gc;
                 if last_moved == 1 {

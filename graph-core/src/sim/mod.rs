@@ -263,12 +263,13 @@ impl Simulator {
         self.watch.record_signs(&mut self.model, &mut self.signals, &self.x, self.t);
         if let Some(k) = self.signals.iter().position(|v| !v.is_finite()) {
             let (block, port) = self.model.signal_owner(k).map_or(("?".to_string(), "?"), |(m, p)| (m.name.clone(), p));
-            return Err(SimError::NonFinite {
-                t: self.t,
-                block,
-                what: format!("output `{port}`"),
-                value: self.signals[k],
-            });
+            let diagnosis =
+                self.model.meta.iter().position(|m| m.name == block).and_then(|i| self.model.blocks[i].diagnose());
+            let what = match diagnosis {
+                Some(why) => format!("output `{port}`: {why}"),
+                None => format!("output `{port}`"),
+            };
+            return Err(SimError::NonFinite { t: self.t, block, what, value: self.signals[k] });
         }
         Ok(())
     }
