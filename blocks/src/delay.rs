@@ -296,7 +296,8 @@ fn history(p: &mut Params) -> Result<(f64, History), Diagnostic> {
         other => return Err(p.error("order", format!("must be 1 (linear) or 3 (cubic), got {other}"))),
     };
     let capacity = p.count_or("buffer", 1024)?;
-    let limit = p.number_where("max_buffer", Some(1e7), |v| v >= 4.0 && v <= 1e9, "a number of samples in [4, 1e9]")?;
+    let limit =
+        p.number_where("max_buffer", Some(1e7), |v| (4.0..=1e9).contains(&v), "a number of samples in [4, 1e9]")?;
     Ok((initial, History::new(1, capacity, limit as usize, cubic)))
 }
 
