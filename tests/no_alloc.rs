@@ -1,7 +1,8 @@
 //! The step loop allocates nothing: a counting global allocator watches a
 //! compiled graph with a transfer function, PIDs, discrete blocks, noise,
 //! the ADRC blocks and a fuzzy system step thousands of times, recorder
-//! included.
+//! included; and another with events, modes and delays under the explicit
+//! and the implicit solver.
 
 use ctlgraph::record::Recorder;
 use ctlgraph_core::Simulator;
@@ -77,18 +78,43 @@ record: [r, y: plant, u: pid, dpid, dtf, lsef, tune]
 fn allocations_while_stepping(solver: &str, steps: usize) -> usize {
     let yaml = GRAPH.replace("SOLVER", solver);
     let model = ctlgraph::compile_str(&yaml, "alloc.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
-    count_allocations(model, steps)
+    count_allocations(model, 1, steps)
 }
 
-fn count_allocations(model: ctlgraph_core::Model, steps: usize) -> usize {
+/// Events, modes and delays: a relay limit cycle through a transport delay
+/// (whose history starts small and grows during the warm-up), a reset
+/// integrator, saturation and a discrete delay.
+const EVENTS: &str = "
+simulation: { stop: 1000.0, solver: SOLVER }
+blocks:
+  relay: { type: relay, on_threshold: 0.1, off_threshold: -0.1, on_value: -1, off_value: 1 }
+  dead:  { type: transport_delay, delay: 0.05, buffer: 4 }
+  vdead: { type: variable_transport_delay, max_delay: 0.1, buffer: 4 }
+  tau:   { type: constant, value: 0.03 }
+  plant: { type: transfer_function, num: [20], den: [1, 2] }
+  sat:   { type: saturation, lower: -0.5, upper: 0.5 }
+  saw:   { type: integrator, reset: rising, state_port: true }
+  lvl:   { type: sum, signs: \"+-\" }
+  one:   { type: constant, value: 1 }
+  zd:    { type: delay, samples: 4, sample_time: 1.0e-3 }
+  hit:   { type: hit_crossing }
+wires: [relay -> dead, dead -> plant, plant -> relay, plant -> vdead.u, tau -> vdead.delay, vdead -> sat,
+        sat -> saw.u, saw.state -> lvl.u1, one -> lvl.u2, lvl -> saw.reset, plant -> zd, plant -> hit]
+record: [y: plant, sat, saw: saw.y, zd, hit]
+";
+
+fn count_allocations(model: ctlgraph_core::Model, warm_up: usize, steps: usize) -> usize {
     COUNT.with(|c| c.set(0));
     let mut sim = Simulator::new(model, None);
     let mut recorder = Recorder::new(sim.model());
     let mut sum = 0.0;
     let mut sink = |row: &[f64]| sum += row[1];
-    // Warm up once outside the counted region (lazy statics, first-step paths).
-    sim.outputs().unwrap();
-    sim.advance().unwrap();
+    // Warm up outside the counted region (lazy statics, first-step paths,
+    // history buffers growing to their working size).
+    for _ in 0..warm_up {
+        sim.outputs().unwrap();
+        sim.advance().unwrap();
+    }
     ENABLED.with(|on| on.set(true));
     for _ in 0..steps {
         sim.outputs().unwrap();
@@ -109,6 +135,29 @@ fn stepping_allocates_nothing() {
     // drive, reference filter; RLS.
     for graph in ["graphs/contact-force/compare.yaml", "graphs/contact-force/identify.yaml"] {
         let model = ctlgraph::compile_file(graph.as_ref(), &[]).unwrap_or_else(|d| panic!("{d}"));
-        assert_eq!(count_allocations(model, 1_500), 0, "{graph}");
+        assert_eq!(count_allocations(model, 1, 1_500), 0, "{graph}");
     }
+}
+
+#[test]
+fn events_modes_and_delays_allocate_nothing_once_warm() {
+    for (solver, warm_up) in
+        [("{ method: dopri5, max_step: 1.0e-3 }", 2_000), ("{ method: rk4, step: 1.0e-4, zero_crossing: true }", 2_000)]
+    {
+        let yaml = EVENTS.replace("SOLVER", solver);
+        let model = ctlgraph::compile_str(&yaml, "events.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
+        let stop_events = count_events(&yaml);
+        assert!(stop_events > 0, "the relay cycles: {stop_events} events");
+        assert_eq!(count_allocations(model, warm_up, 10_000), 0, "{solver}");
+    }
+    let stiff = EVENTS.replace("SOLVER", "{ method: trbdf2, max_step: 1.0e-3 }");
+    let model = ctlgraph::compile_str(&stiff, "events.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(count_allocations(model, 2_000, 5_000), 0, "trbdf2");
+}
+
+/// Events located in the first two seconds.
+fn count_events(yaml: &str) -> u64 {
+    let model = ctlgraph::compile_str(yaml, "events.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
+    let mut sim = Simulator::new(model, Some(2.0));
+    sim.run(&mut |_, _| {}).unwrap().events
 }

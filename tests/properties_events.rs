@@ -1,0 +1,109 @@
+//! Property tests of the event-driven and delay blocks (relay, hit
+//! crossing, resettable integrator, transport delays, discrete delay) with
+//! the strategies and harness of `ctlgraph_blocks::testing`.
+
+use ctlgraph::blocks::testing::{self, Harness, Signal};
+use proptest::prelude::*;
+
+fn run(ty: &str, params: &str, inputs: &[&Signal], stop: f64) -> ctlgraph::record::Trace {
+    let registry = ctlgraph::registry();
+    let mut h = Harness::new(&registry, ty, params);
+    for s in inputs {
+        h = h.input(s);
+    }
+    h.run(stop).unwrap_or_else(|e| panic!("{ty} {{ {params} }}: {e}"))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+
+    #[test]
+    fn relay_switches_only_past_its_thresholds(u in testing::signal(3.0), (off, on) in testing::limits(2.0)) {
+        let params = format!("on_threshold: {on:e}, off_threshold: {off:e}, on_value: 2, off_value: -1");
+        let trace = run("relay", &params, &[&u], 3.0);
+        let (t, y) = (trace.t(), trace.column("y").unwrap());
+        for i in 0..t.len() {
+            prop_assert!(y[i] == 2.0 || y[i] == -1.0);
+            let before = if i == 0 { -1.0 } else { y[i - 1] };
+            // Turning on needs u >= on, turning off u <= off (up to the
+            // location tolerance); otherwise the state holds.
+            if y[i] == 2.0 && before == -1.0 {
+                prop_assert!(u.eval(t[i]) >= on - 1e-9, "on at t = {} with u = {}", t[i], u.eval(t[i]));
+            }
+            if y[i] == -1.0 && before == 2.0 {
+                prop_assert!(u.eval(t[i]) <= off + 1e-9, "off at t = {} with u = {}", t[i], u.eval(t[i]));
+            }
+        }
+    }
+
+    #[test]
+    fn hit_crossing_fires_only_where_the_input_crossed(u in testing::signal(2.0), level in -1.0..1.0f64) {
+        let trace = run("hit_crossing", &format!("level: {level:e}"), &[&u], 3.0);
+        let (t, y) = (trace.t(), trace.column("y").unwrap());
+        for i in 1..t.len() {
+            prop_assert!(y[i] == 0.0 || y[i] == 1.0);
+            if y[i] == 1.0 {
+                // The input is at the level there (located) or crossed it by a step.
+                let (a, b) = (u.eval(t[i - 1]) - level, u.eval(t[i]) - level);
+                prop_assert!(b.abs() < 1e-6 || a * b <= 0.0, "hit at t = {} without a crossing", t[i]);
+            }
+        }
+    }
+
+    #[test]
+    fn resettable_integrator_restarts_from_its_initial_value(u in testing::signal(2.0), gate in testing::signal(1.0),
+            x0 in -1.0..1.0f64) {
+        // Between resets |x − x0| grows at most like sup|u|·(t − last reset).
+        let trace = run("integrator", &format!("initial: {x0:e}, reset: either"), &[&u, &gate], 3.0);
+        let (t, y) = (trace.t(), trace.column("y").unwrap());
+        for i in 0..t.len() {
+            prop_assert!((y[i] - x0).abs() <= u.bound() * t[i] + 1e-9);
+        }
+    }
+
+    #[test]
+    fn transport_delay_shifts_smooth_inputs_within_the_interpolation_bound(u in testing::signal(2.0),
+            delay in 0.0..0.5f64, initial in -1.0..1.0f64) {
+        let smooth = Signal { steps: Vec::new(), ..u };
+        let trace = run("transport_delay", &format!("delay: {delay:e}, initial: {initial:e}"), &[&smooth], 2.0);
+        let (t, y) = (trace.t(), trace.column("y").unwrap());
+        // Linear interpolation between stored samples at most h = 0.01 apart.
+        let curvature: f64 = smooth.sines.iter().map(|&(a, f, _)| a.abs() * (2.0 * std::f64::consts::PI * f).powi(2)).sum();
+        let bound = 0.01f64.powi(2) / 8.0 * curvature + 1e-9;
+        for i in 0..t.len() {
+            prop_assert!(y[i].abs() <= initial.abs().max(smooth.bound()) + 1e-9);
+            if t[i] < delay {
+                prop_assert_eq!(y[i], initial);
+            } else {
+                prop_assert!((y[i] - smooth.eval(t[i] - delay)).abs() <= bound, "t = {}: {} vs {}", t[i], y[i], smooth.eval(t[i] - delay));
+            }
+        }
+    }
+
+    #[test]
+    fn variable_transport_delay_is_bounded(u in testing::signal(2.0), tau in testing::signal(0.2), initial in -1.0..1.0f64) {
+        let tau = Signal { bias: tau.bias + 0.25, ..tau };
+        let trace = run("variable_transport_delay", &format!("max_delay: 0.5, initial: {initial:e}"), &[&u, &tau], 2.0);
+        for y in trace.column("y").unwrap() {
+            prop_assert!(y.abs() <= initial.abs().max(u.bound()) + 1e-9);
+        }
+    }
+
+    #[test]
+    fn discrete_delay_shifts_by_n_samples(u in testing::signal(3.0), n in 1usize..6, period in 0.01..0.2f64) {
+        let params = format!("samples: {n}, initial: 7, sample_time: {period:e}");
+        let trace = run("delay", &params, &[&u], 2.0);
+        let (t, y) = (trace.t(), trace.column("y").unwrap());
+        let mut hits = Vec::new();
+        for i in 0..t.len() {
+            let k = (t[i] / period).round();
+            if (t[i] - k * period).abs() < 1e-12 && (hits.is_empty() || k as usize > hits.len() - 1) {
+                hits.push(i);
+            }
+        }
+        for (k, &i) in hits.iter().enumerate() {
+            let expected = if k < n { 7.0 } else { u.eval(t[hits[k - n]]) };
+            prop_assert!((y[i] - expected).abs() < 1e-12, "k = {k}: {} vs {expected}", y[i]);
+        }
+    }
+}
