@@ -94,10 +94,11 @@ proptest! {
         let params = format!("samples: {n}, initial: 7, sample_time: {period:e}");
         let trace = run("delay", &params, &[&u], 2.0);
         let (t, y) = (trace.t(), trace.column("y").unwrap());
+        // Rows at sample hits, one per hit.
         let mut hits = Vec::new();
-        for i in 0..t.len() {
-            let k = (t[i] / period).round();
-            if (t[i] - k * period).abs() < 1e-12 && (hits.is_empty() || k as usize > hits.len() - 1) {
+        for (i, &ti) in t.iter().enumerate() {
+            let k = (ti / period).round();
+            if (ti - k * period).abs() < 1e-12 && k as usize == hits.len() {
                 hits.push(i);
             }
         }
