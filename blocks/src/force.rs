@@ -80,7 +80,11 @@ pub const TYPES: &[BlockType] = &[
               slope p'. The profile is an expression of x (`profile: \"25*(1 - cos(pi*x/250))\"`), \
               or a table (`profile_x`, `profile_z`, linear), or a CSV file (`profile_file` with \
               columns x and z). Slopes of an expression by central differences.\n\
-              Bounds: N >= 0 always; N = 0 out of contact.",
+              Modes: pressing or free, chosen at major steps; zero crossings of δ (onset) and of \
+              k_e·δ + c_e·δ' (release, where the damper would pull) end the step there, so contact \
+              starts and ends at its located time instead of inside a step. Friction's direction is a \
+              plain function of the sliding velocity (no mode: a sticking probe would chatter).\n\
+              Bounds: N >= 0 at major steps; N = 0 out of contact.",
         inputs: &[
             PortDoc { name: "x", doc: "probe position along the surface" },
             PortDoc { name: "z", doc: "probe height" },
@@ -249,22 +253,19 @@ fn build_normal_force(p: &mut Params) -> Result<Built, Diagnostic> {
 
 /// A surface height profile and its slope.
 enum Profile {
-    Expr { expr: Expr, vars: [f64; 1], step: f64 },
+    Expr { expr: Expr, step: f64 },
     Table(crate::tables::Table),
 }
 
 impl Profile {
-    fn height(&mut self, x: f64) -> f64 {
+    fn height(&self, x: f64) -> f64 {
         match self {
-            Profile::Expr { expr, vars, .. } => {
-                vars[0] = x;
-                expr.eval(&vars[..])
-            }
+            Profile::Expr { expr, .. } => expr.eval(&[x]),
             Profile::Table(t) => t.eval(x),
         }
     }
 
-    fn slope(&mut self, x: f64) -> f64 {
+    fn slope(&self, x: f64) -> f64 {
         let h = match self {
             Profile::Expr { step, .. } => *step,
             Profile::Table(_) => 1e-9 * x.abs().max(1.0),
@@ -279,16 +280,36 @@ pub struct Contact {
     stiffness: f64,
     damping: f64,
     mu: f64,
+    /// The mode: pressing (δ > 0 and k_e·δ + c_e·δ' > 0) or free.
+    pressing: bool,
 }
 
 impl Contact {
-    /// (fx, fz, N, slope) for probe position and velocity.
-    pub fn forces(&mut self, x: f64, z: f64, vx: f64, vz: f64) -> (f64, f64, f64, f64) {
+    fn new(profile: Profile, stiffness: f64, damping: f64, mu: f64) -> Self {
+        Contact { profile, stiffness, damping, mu, pressing: false }
+    }
+
+    /// Penetration δ, its rate δ' and the slope p' at probe position and velocity.
+    fn penetration(&self, x: f64, z: f64, vx: f64, vz: f64) -> (f64, f64, f64) {
         let slope = self.profile.slope(x);
         let norm = (1.0 + slope * slope).sqrt();
-        let depth = (self.profile.height(x) - z) / norm;
-        let rate = (slope * vx - vz) / norm;
-        let n = if depth > 0.0 { (self.stiffness * depth + self.damping * rate).max(0.0) } else { 0.0 };
+        ((self.profile.height(x) - z) / norm, (slope * vx - vz) / norm, slope)
+    }
+
+    /// (fx, fz, N, slope) for probe position and velocity, the mode chosen
+    /// from them.
+    pub fn forces(&self, x: f64, z: f64, vx: f64, vz: f64) -> (f64, f64, f64, f64) {
+        self.forces_in_mode(x, z, vx, vz, None)
+    }
+
+    /// As [`Contact::forces`]; with `pressing` given, in that mode (frozen
+    /// inside a solver step: pressing, N = k_e·δ + c_e·δ' whatever its sign).
+    fn forces_in_mode(&self, x: f64, z: f64, vx: f64, vz: f64, pressing: Option<bool>) -> (f64, f64, f64, f64) {
+        let (depth, rate, slope) = self.penetration(x, z, vx, vz);
+        let push = self.stiffness * depth + self.damping * rate;
+        let pressing = pressing.unwrap_or(depth > 0.0 && push > 0.0);
+        let n = if pressing { push } else { 0.0 };
+        let norm = (1.0 + slope * slope).sqrt();
         // Unit normal (out of the surface) and tangent (along +x).
         let (nx, nz) = (-slope / norm, 1.0 / norm);
         let (tx, tz) = (1.0 / norm, slope / norm);
@@ -300,12 +321,33 @@ impl Contact {
 }
 
 impl Block for Contact {
+    fn initialize(&mut self, _x0: &mut [f64]) {
+        self.pressing = false;
+    }
+
     fn output(&mut self, io: &mut Io) {
-        let (fx, fz, n, slope) = self.forces(io.u(0), io.u(1), io.u(2), io.u(3));
+        let (x, z, vx, vz) = (io.u(0), io.u(1), io.u(2), io.u(3));
+        let frozen = (!io.may_switch()).then_some(self.pressing);
+        let (fx, fz, n, slope) = self.forces_in_mode(x, z, vx, vz, frozen);
+        if frozen.is_none() {
+            self.pressing = n > 0.0;
+        }
         io.set(0, fx);
         io.set(1, fz);
         io.set(2, n);
         io.set(3, slope);
+    }
+
+    fn num_zero_crossings(&self) -> usize {
+        2
+    }
+
+    /// The onset and release of contact: δ, and k_e·δ + c_e·δ' (where the
+    /// damper would start to pull).
+    fn zero_crossings(&self, io: &Io, g: &mut [f64]) {
+        let (depth, rate, _) = self.penetration(io.u(0), io.u(1), io.u(2), io.u(3));
+        g[0] = depth;
+        g[1] = self.stiffness * depth + self.damping * rate;
     }
 }
 
@@ -318,7 +360,7 @@ fn build_profile(p: &mut Params) -> Result<Profile, Diagnostic> {
         };
         let scope = VarScope { vars: &["x"], params: p.scope() };
         let expr = Expr::parse(&text, &scope).map_err(|e| expr_diagnostic(&e, &pos))?;
-        return Ok(Profile::Expr { expr, vars: [0.0], step: 1e-6 });
+        return Ok(Profile::Expr { expr, step: 1e-6 });
     }
     let outside = crate::tables::Outside::Clamp;
     if p.has("profile_x") {
@@ -347,7 +389,7 @@ fn build_contact(p: &mut Params) -> Result<Built, Diagnostic> {
     for name in ["fx", "fz", "fn", "slope"] {
         iface = iface.output(name, Width::Fixed(1));
     }
-    Ok(Built::new(Contact { profile, stiffness, damping, mu }, iface))
+    Ok(Built::new(Contact::new(profile, stiffness, damping, mu), iface))
 }
 
 /// Je x'' + Be x' = u − d.

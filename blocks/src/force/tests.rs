@@ -73,12 +73,12 @@ fn flat_contact(stiffness: f64, mu: f64) -> Contact {
     let scope: Vec<(String, f64)> = Vec::new();
     let vs = VarScope { vars: &["x"], params: &scope };
     let expr = Expr::parse("0.1*x", &vs).unwrap();
-    Contact { profile: Profile::Expr { expr, vars: [0.0], step: 1e-6 }, stiffness, damping: 0.0, mu }
+    Contact::new(Profile::Expr { expr, step: 1e-6 }, stiffness, 0.0, mu)
 }
 
 #[test]
 fn contact_is_zero_when_apart_and_linear_in_penetration() {
-    let mut c = flat_contact(100.0, 0.0);
+    let c = flat_contact(100.0, 0.0);
     assert_eq!(c.forces(10.0, 1.5, 1.0, 0.0).2, 0.0, "above the surface z = 1");
     let norm = (1.0f64 + 0.01).sqrt();
     let (_, _, n1, slope) = c.forces(10.0, 0.9, 0.0, 0.0);
@@ -89,7 +89,7 @@ fn contact_is_zero_when_apart_and_linear_in_penetration() {
 
 #[test]
 fn friction_opposes_the_motion_and_normal_force_recovers_n() {
-    let mut c = flat_contact(100.0, 0.2);
+    let c = flat_contact(100.0, 0.2);
     for vx in [1.0, -1.0] {
         let (fx, fz, n, slope) = c.forces(10.0, 0.9, vx, 0.0);
         // fx is the force against +x: moving +x it resists (positive part
