@@ -143,3 +143,32 @@ fn dot_and_blocks() {
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("did you mean `pid`?"));
 }
+
+#[test]
+fn events_and_newton_work_are_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("ball.json");
+    let out = ctlgraph(&["run", "graphs/events/bouncing_ball.yaml", "--report", path(&json)]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("steps, 7 events located, 10 s simulated"), "{}", text(&out.stdout));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["statistics"]["events"], 7);
+
+    let json = dir.path().join("robertson.json");
+    let out = ctlgraph(&["run", "graphs/stiff/robertson.yaml", "--report", path(&json)]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["solver"]["method"], "trbdf2");
+    let stats = &report["statistics"];
+    assert!(stats["jacobian_evaluations"].as_u64().unwrap() > 0, "{stats}");
+    assert!(stats["lu_factorizations"].as_u64().unwrap() >= stats["jacobian_evaluations"].as_u64().unwrap());
+    assert!(stats["newton_failures"].is_u64(), "{stats}");
+
+    // Past the Zeno point the run fails with the block named, exit 1.
+    let zeno = dir.path().join("zeno.yaml");
+    let text_in = std::fs::read_to_string("graphs/events/bouncing_ball.yaml").unwrap();
+    std::fs::write(&zeno, text_in.replace("stop: 10.0", "stop: 15.0")).unwrap();
+    let out = ctlgraph(&["run", path(&zeno)]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("chatters") && text(&out.stderr).contains("adaptive"), "{}", text(&out.stderr));
+}

@@ -228,3 +228,37 @@ fn nothing_a_user_writes_panics() {
         }
     }
 }
+
+/// The 1-based column of `needle` in line `line` of `yaml`.
+fn col(yaml: &str, line: usize, needle: &str) -> u32 {
+    let text = yaml.lines().nth(line - 1).unwrap();
+    text.find(needle).unwrap_or_else(|| panic!("`{needle}` not in `{text}`")) as u32 + 1
+}
+
+#[test]
+fn event_stiff_and_delay_settings_are_checked() {
+    let stepped = "simulation: { solver: { method: trbdf2, step: 0.1 } }\n";
+    check(stepped, 1, col(stepped, 1, "0.1"), "trbdf2 chooses its own steps", None);
+    let zc = "simulation: { solver: { method: dopri5, zero_crossing: maybe } }\n";
+    check(zc, 1, col(zc, 1, "maybe"), "`zero_crossing` must be true, false or adaptive", None);
+    let typo = "simulation: { solver: { method: trbdf3 } }\n";
+    check(typo, 1, col(typo, 1, "trbdf3"), "unknown solver method `trbdf3`", Some("trbdf2"));
+    let delay = |params: &str| {
+        format!("blocks:\n  u: {{ type: sine }}\n  d: {{ type: transport_delay, {params} }}\nwires: [u -> d]\n")
+    };
+    let negative = delay("delay: -1");
+    check(&negative, 3, col(&negative, 3, "-1"), "block `d` (transport_delay): `delay`", None);
+    let order = delay("delay: 1, order: 2");
+    check(&order, 3, col(&order, 3, "2 }"), "must be 1 (linear) or 3 (cubic)", None);
+    let relay =
+        "blocks:\n  u: { type: sine }\n  r: { type: relay, on_threshold: -1, off_threshold: 1 }\nwires: [u -> r]\n";
+    check(relay, 3, col(relay, 3, "-1"), "`on_threshold` (-1) must be >= `off_threshold` (1)", None);
+    let reset = "blocks:\n  u: { type: sine }\n  i: { type: integrator, reset: raising }\nwires: [u -> i]\n";
+    check(
+        reset,
+        3,
+        col(reset, 3, "raising"),
+        "`raising` is not one of: none, rising, falling, either, level",
+        Some("rising"),
+    );
+}

@@ -176,3 +176,21 @@ fn min_max_and_switch_hand_over_at_the_crossing() {
     assert!((x - exact).abs() < 1e-8, "min: x(3) = {x} vs {exact}");
     assert!((y - exact).abs() < 1e-8, "switch: y(3) = {y} vs {exact}");
 }
+
+#[test]
+fn contact_onset_is_located() {
+    // A probe descending at 1 m/s onto the flat surface z = 0 touches it at t = 1.
+    let yaml = "simulation: { stop: 1.5, solver: { method: dopri5, max_step: 0.2 } }\n\
+                blocks:\n  x: { type: constant, value: 0 }\n  vx: { type: constant, value: 0 }\n\
+                \x20 vz: { type: constant, value: -1 }\n  z: { type: integrator, initial: 1 }\n\
+                \x20 c: { type: contact, profile: \"0\", stiffness: 1000, damping: 10 }\n\
+                wires: [vz -> z, x -> c.x, z -> c.z, vx -> c.vx, vz -> c.vz]\nrecord: [fn: c.fn]\n";
+    let trace = run(yaml);
+    let fn_ = trace.column("fn").unwrap();
+    let first = fn_.iter().position(|&f| f > 0.0).unwrap();
+    let t = trace.t()[first];
+    assert!((t - 1.0).abs() < 1e-12, "contact starts at t = {t}");
+    // At onset the damper alone pushes: N = c_e·δ' = 10.
+    assert!((fn_[first] - 10.0).abs() < 1e-6, "N at onset {}", fn_[first]);
+    assert_eq!(fn_[first - 1], 0.0);
+}
