@@ -194,3 +194,26 @@ fn contact_onset_is_located() {
     assert!((fn_[first] - 10.0).abs() < 1e-6, "N at onset {}", fn_[first]);
     assert_eq!(fn_[first - 1], 0.0);
 }
+
+#[test]
+fn fixed_step_methods_locate_crossings_when_asked() {
+    // rk4 integrates the ball's parabola exactly; with detection on, the
+    // impacts fall between grid points at their exact times.
+    let text = std::fs::read_to_string("graphs/events/bouncing_ball.yaml").unwrap();
+    let rk4 = text.replace(
+        "solver: { method: dopri5, rtol: 1.0e-10, atol: 1.0e-12, max_step: 0.05 }",
+        "solver: { method: rk4, step: 0.01, zero_crossing: true }",
+    );
+    assert_ne!(rk4, text);
+    let trace = ctlgraph::simulate(ctlgraph::compile_str(&rk4, "rk4.yaml", &[]).unwrap(), None).unwrap();
+    let impacts = hit_times(&trace, "impact");
+    let (g, h0) = (9.81f64, 10.0f64);
+    let first = (2.0 * h0 / g).sqrt();
+    assert!((impacts[0] - first).abs() < 1e-12, "{} vs {first}", impacts[0]);
+    assert_eq!(impacts.len(), 7);
+    // Off (the fixed-step default), the impact is seen a step late.
+    let off = rk4.replace(", zero_crossing: true", "");
+    let trace = ctlgraph::simulate(ctlgraph::compile_str(&off, "off.yaml", &[]).unwrap(), None).unwrap();
+    let late = hit_times(&trace, "impact");
+    assert!(late[0] > first && late[0] - first < 0.01 + 1e-12, "{}", late[0]);
+}
