@@ -45,6 +45,9 @@ pub struct BlockMeta {
 #[derive(Clone, Debug)]
 pub(crate) struct Slot {
     pub rate: Rate,
+    /// Whether the block's mode is frozen in minor steps (its zero
+    /// crossings are watched); set by the simulator.
+    pub frozen: bool,
     pub states: Range<usize>,
     pub inputs: Range<usize>,
     pub outputs: Range<usize>,
@@ -178,7 +181,13 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let columns = record_columns(g, &nodes, &index, &direct, &out_offset)?;
     let slots = meta
         .iter()
-        .map(|m| Slot { rate: m.rate, states: m.states.clone(), inputs: m.inputs.clone(), outputs: m.outputs.clone() })
+        .map(|m| Slot {
+            rate: m.rate,
+            frozen: false,
+            states: m.states.clone(),
+            inputs: m.inputs.clone(),
+            outputs: m.outputs.clone(),
+        })
         .collect();
     let checks = crate::checks::compile(&g.checks, &headers(&columns), &g.parameters)?;
     Ok(Model {

@@ -13,7 +13,7 @@
 //! warning. Either way a Zeno model cannot hang.
 
 use super::{Minor, SimError, io_for};
-use crate::compile::Model;
+use crate::compile::{Model, Slot};
 use crate::flatten::ZeroCrossing;
 use ctlgraph_solver::Integrator;
 use std::ops::Range;
@@ -119,14 +119,14 @@ impl Watch {
         }
     }
 
-    /// Back to the start of a run (detection re-enabled); writes into
-    /// `frozen` which model blocks have their modes frozen in minor steps.
-    pub fn reset(&mut self, frozen: &mut [bool]) {
+    /// Back to the start of a run (detection re-enabled); marks in `slots`
+    /// which blocks have their modes frozen in minor steps.
+    pub fn reset(&mut self, slots: &mut [Slot]) {
         let on = self.mode != ZeroCrossing::Off;
         self.active.iter_mut().for_each(|a| *a = on);
-        frozen.iter_mut().for_each(|f| *f = false);
+        slots.iter_mut().for_each(|s| s.frozen = false);
         for &i in &self.blocks {
-            frozen[i] = on;
+            slots[i].frozen = on;
         }
         self.sign.iter_mut().for_each(|s| *s = 0.0);
         self.events = 0;

@@ -110,8 +110,6 @@ pub struct Simulator {
     stateful: Vec<usize>,
     /// Zero-crossing functions and their detection.
     watch: Watch,
-    /// Per block: whether its mode is frozen in minor steps.
-    frozen: Vec<bool>,
 }
 
 impl Simulator {
@@ -149,7 +147,6 @@ impl Simulator {
             continuous,
             stateful,
             watch,
-            frozen: vec![false; model.blocks.len()],
             model,
         };
         sim.reset();
@@ -172,7 +169,7 @@ impl Simulator {
         self.mark_hits();
         self.next_event = self.earliest_event();
         self.integ.reset();
-        self.watch.reset(&mut self.frozen);
+        self.watch.reset(&mut self.model.slots);
     }
 
     pub fn model(&self) -> &Model {
@@ -300,7 +297,6 @@ impl Simulator {
             signals: &mut self.signals,
             continuous: &self.continuous,
             stateful: &self.stateful,
-            frozen: &self.frozen,
             t_end: target,
         };
         let mut t_new = if self.x.is_empty() {
@@ -318,7 +314,7 @@ impl Simulator {
             }
             self.integ.invalidate();
             if let Some(block) = self.watch.count_event(t_event, &self.model)? {
-                self.frozen[block] = false;
+                self.model.slots[block].frozen = false;
             }
         }
         // Land exactly on the target when the solver reached it.
@@ -415,8 +411,6 @@ pub(crate) struct Minor<'a> {
     signals: &'a mut [f64],
     continuous: &'a [usize],
     stateful: &'a [usize],
-    /// Per block: whether its mode is frozen in minor steps.
-    frozen: &'a [bool],
     t_end: f64,
 }
 
@@ -427,8 +421,7 @@ impl Minor<'_> {
         let left = t >= self.t_end;
         for &i in self.continuous {
             let meta = &m.slots[i];
-            let mut io =
-                io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(self.frozen[i]);
+            let mut io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
             m.blocks[i].output(&mut io);
         }
     }
@@ -438,8 +431,9 @@ impl Minor<'_> {
     /// Block `i`'s zero-crossing functions at (t, x), outputs computed.
     fn zero_crossings(&mut self, i: usize, t: f64, x: &[f64], g: &mut [f64]) {
         let m = &mut *self.model;
-        let io = io_for(&m.slots[i], t, t >= self.t_end, x, self.signals, &m.in_ports, &m.out_ports)
-            .in_minor_step(self.frozen[i]);
+        let meta = &m.slots[i];
+        let io =
+            io_for(meta, t, t >= self.t_end, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
         m.blocks[i].zero_crossings(&io, g);
     }
 }
@@ -451,7 +445,7 @@ impl OdeSystem for Minor<'_> {
         let left = t >= self.t_end;
         for &i in self.stateful {
             let meta = &m.slots[i];
-            let io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(self.frozen[i]);
+            let io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
             m.blocks[i].derivatives(&io, &mut dx[meta.states.clone()]);
         }
     }
