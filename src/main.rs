@@ -265,7 +265,7 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
     progress.finish();
     let wall = start.elapsed().as_secs_f64();
     let results: Vec<_> = match (&result, &trace) {
-        (Ok(_), Some(tr)) => checks.iter().map(|c| c.evaluate(tr)).collect(),
+        (Ok(_), Some(tr)) => checks.iter().map(|c| tr.check(c)).collect(),
         _ => Vec::new(),
     };
     if let Some(path) = opts.report {

@@ -46,7 +46,7 @@ impl From<Diagnostic> for Failure {
 pub fn run_checks(model: Model, stop: Option<f64>) -> Result<(Trace, Vec<CheckResult>), Failure> {
     let checks = model.checks.clone();
     let trace = crate::simulate(model, stop).map_err(|e| Failure::Run(e.to_string()))?;
-    let results = checks.iter().map(|c| c.evaluate(&trace)).collect();
+    let results = checks.iter().map(|c| trace.check(c)).collect();
     Ok((trace, results))
 }
 

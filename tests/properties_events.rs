@@ -63,7 +63,9 @@ proptest! {
 
     #[test]
     fn transport_delay_shifts_smooth_inputs_within_the_interpolation_bound(u in testing::signal(2.0),
-            delay in 0.0..0.5f64, initial in -1.0..1.0f64) {
+            delay in prop_oneof![Just(0.0), 0.02..0.5f64], initial in -1.0..1.0f64) {
+        // Delays shorter than the step (0.01) are extrapolated (documented),
+        // outside this bound; zero is plain feedthrough.
         let smooth = Signal { steps: Vec::new(), ..u };
         let trace = run("transport_delay", &format!("delay: {delay:e}, initial: {initial:e}"), &[&smooth], 2.0);
         let (t, y) = (trace.t(), trace.column("y").unwrap());

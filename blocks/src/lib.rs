@@ -1,7 +1,7 @@
 //! The ctlgraph block library, one module per block family.
 //!
 //! Every block type documents its ports, parameters (with defaults) and
-//! equations in its [`BlockType`] entry; `ctlgraph blocks TYPE` prints them.
+//! equations in its `BlockType` entry; `ctlgraph blocks TYPE` prints them.
 
 use ctlgraph_core::registry::{ParamDoc, PortDoc, Registry};
 

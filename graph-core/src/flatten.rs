@@ -26,15 +26,15 @@ pub struct SimConfig {
 }
 
 /// `solver: { zero_crossing: … }`: whether the simulator locates the zero
-/// crossings blocks declare (see [`crate::Block::zero_crossings`]).
+/// crossings blocks declare (see [`crate::block::Block::zero_crossings`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ZeroCrossing {
     /// Blocks switch mode only at major steps, found where they fall
     /// (the default of fixed-step methods, as in Simulink).
     Off,
-    /// Crossings are located and end the step; chattering (more than
-    /// [`crate::sim::MAX_CONSECUTIVE_EVENTS`] events at nearly one time)
-    /// stops the run with an error naming the block.
+    /// Crossings are located and end the step; chattering (a pile-up of
+    /// events at nearly one time, or a Zeno point) stops the run with an
+    /// error naming the block.
     On,
     /// As `On`, but a chattering block's crossings are ignored from then on
     /// and the run reports it.

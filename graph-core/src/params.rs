@@ -7,9 +7,17 @@
 use crate::block::SampleTime;
 use crate::diag::{Diagnostic, Pos};
 use crate::expr::{Constants, Expr, ExprError, Scope};
-use crate::registry::ParamDoc;
 use crate::yaml::{Key, Kind, Yaml};
 use std::path::{Path, PathBuf};
+
+/// One parameter of a block type, as `ctlgraph blocks TYPE` shows it.
+#[derive(Clone, Copy, Debug)]
+pub struct ParamDoc {
+    pub name: &'static str,
+    /// Default as written in a graph file; `None` means required.
+    pub default: Option<&'static str>,
+    pub doc: &'static str,
+}
 
 /// A block's parameters as written, with the scope their expressions see.
 pub struct Params<'a> {

@@ -4,17 +4,9 @@
 
 use crate::block::{Block, Interface};
 use crate::diag::Diagnostic;
+pub use crate::params::ParamDoc;
 use crate::params::Params;
 use std::collections::BTreeMap;
-
-/// One parameter of a block type, as `ctlgraph blocks TYPE` shows it.
-#[derive(Clone, Copy, Debug)]
-pub struct ParamDoc {
-    pub name: &'static str,
-    /// Default as written in a graph file; `None` means required.
-    pub default: Option<&'static str>,
-    pub doc: &'static str,
-}
 
 /// A port, as documented.
 #[derive(Clone, Copy, Debug)]

@@ -2,6 +2,7 @@
 //! major steps (with decimation), and keeping them in memory — what plots
 //! are drawn from and checks are evaluated on.
 
+use crate::checks::{Check, CheckResult};
 use crate::compile::{Column, Model};
 use crate::sim::{SimError, Simulator};
 
@@ -86,6 +87,11 @@ impl Trace {
     /// Time stamps.
     pub fn t(&self) -> &[f64] {
         &self.columns[0]
+    }
+
+    /// A graph check evaluated on these signals.
+    pub fn check(&self, check: &Check) -> CheckResult {
+        check.evaluate(&self.columns)
     }
 
     /// A column by header name.

@@ -14,7 +14,6 @@ pub mod metrics;
 use crate::diag::{Diagnostic, Pos};
 use crate::expr::{Binding, Constants, Expr, Scope};
 use crate::params::expr_diagnostic;
-use crate::trace::Trace;
 use metrics::Metric;
 use std::cell::RefCell;
 
@@ -200,12 +199,15 @@ fn compile_one(spec: &CheckSpec, headers: &[String], params: &[(String, f64)]) -
 
 impl Check {
     /// Evaluates the check on a run's recorded signals.
-    pub fn evaluate(&self, trace: &Trace) -> CheckResult {
-        let t = trace.t();
+    /// The check over recorded columns: `columns[0]` is time, the others
+    /// in the order of the headers the check was compiled against.
+    /// (`Trace::check` is the usual entry.)
+    pub fn evaluate(&self, columns: &[Vec<f64>]) -> CheckResult {
+        let t = &columns[0];
         let mut vars = vec![f64::NAN; self.calls.len()];
         for (k, call) in self.calls.iter().enumerate() {
             let args: Vec<f64> = call.args.iter().map(|a| a.eval(&vars)).collect();
-            vars[k] = metrics::evaluate(call.metric, t, &trace.columns[call.column], &args);
+            vars[k] = metrics::evaluate(call.metric, t, &columns[call.column], &args);
         }
         let (measured, bound) = (self.lhs.eval(&vars), self.rhs.eval(&vars));
         CheckResult { name: self.name.clone(), measured, op: self.op, bound, passed: self.op.holds(measured, bound) }
@@ -216,13 +218,12 @@ impl Check {
 mod tests {
     use super::*;
 
-    fn trace() -> Trace {
-        let mut tr = Trace::new(vec!["t".into(), "y".into(), "e".into()]);
-        for i in 0..=100 {
-            let t = i as f64 / 100.0;
-            tr.push(&[t, t * t, 1.0 - t]);
-        }
-        tr
+    /// Headers and columns of y = t², e = 1 − t on [0, 1].
+    fn trace() -> (Vec<String>, Vec<Vec<f64>>) {
+        let t: Vec<f64> = (0..=100).map(|i| i as f64 / 100.0).collect();
+        let y = t.iter().map(|t| t * t).collect();
+        let e = t.iter().map(|t| 1.0 - t).collect();
+        (vec!["t".into(), "y".into(), "e".into()], vec![t, y, e])
     }
 
     fn spec(text: &str) -> CheckSpec {
@@ -230,9 +231,9 @@ mod tests {
     }
 
     fn run(text: &str) -> CheckResult {
-        let tr = trace();
+        let (headers, columns) = trace();
         let params = vec![("k".to_string(), 2.0)];
-        compile(&[spec(text)], &tr.headers, &params).unwrap()[0].evaluate(&tr)
+        compile(&[spec(text)], &headers, &params).unwrap()[0].evaluate(&columns)
     }
 
     #[test]
@@ -250,8 +251,8 @@ mod tests {
 
     #[test]
     fn errors_point_into_the_check() {
-        let tr = trace();
-        let err = |text: &str| compile(&[spec(text)], &tr.headers, &[]).unwrap_err();
+        let (headers, _) = trace();
+        let err = |text: &str| compile(&[spec(text)], &headers, &[]).unwrap_err();
         let d = err("peak(ee, 0.6) < 1");
         assert_eq!((d.pos.clone().unwrap().col, d.message.as_str()), (10, "check: unknown name `ee`"));
         assert_eq!(d.hint.as_deref(), Some("did you mean `e`?"));

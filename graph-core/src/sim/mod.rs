@@ -7,7 +7,7 @@
 //! time) and the stop time; the adaptive method adds its own accepted steps.
 //! Hits are computed from integer tick counts (`offset + k·period`), never
 //! by accumulating floating-point time. Zero crossings end a step where a
-//! block's mode must change ([`events`]). After `initialize`, stepping
+//! block's mode must change (module `events`). After `initialize`, stepping
 //! allocates nothing.
 
 mod events;

@@ -1,6 +1,6 @@
 //! ODE integrators: fixed-step Euler, Heun and classic RK4, the adaptive
 //! Dormand–Prince 5(4) pair with embedded error control, and the implicit,
-//! L-stable TR-BDF2 for stiff systems ([`trbdf2`]).
+//! L-stable TR-BDF2 for stiff systems (module `trbdf2`).
 //!
 //! The caller owns the time line. Each call to [`Integrator::advance`] moves
 //! the state from `t` towards a limit `t_limit` (the next sample hit, event or
