@@ -174,11 +174,20 @@ struct Tolerance {
     initial_step: Option<f64>,
 }
 
-/// Whether a trial step `h` should be stretched to land on a limit `span`
-/// away: when it reaches it, or nearly (a sliver of a step left over would
-/// waste a whole step later).
-fn lands(h: f64, span: f64) -> bool {
-    h >= span * (1.0 - 1e-9) || span - h < 0.01 * h
+/// Fits a trial step `h` from `t` to the limit: it lands exactly on
+/// `t_limit` when it reaches it, or nearly (a sliver of a step left over
+/// would waste a whole step later). Returns whether it lands and where the
+/// step ends.
+fn trial_step(t: f64, t_limit: f64, h: &mut f64) -> Result<(bool, f64), SolverError> {
+    let span = t_limit - t;
+    let landing = *h >= span * (1.0 - 1e-9) || span - *h < 0.01 * *h;
+    if landing {
+        *h = span;
+    }
+    if t + *h == t {
+        return Err(SolverError::StepTooSmall { t, step: *h });
+    }
+    Ok((landing, if landing { t_limit } else { t + *h }))
 }
 
 /// The next step after an accepted one of size `h` whose error ratio gave
@@ -421,18 +430,9 @@ impl Integrator {
                 None => self.initial_step(sys, t, x, rtol, atol, max_step),
             };
         }
-        let span = t_limit - t;
         let mut h = self.h_next.min(max_step);
         loop {
-            // Land exactly on the limit when it is within reach.
-            let landing = lands(h, span);
-            if landing {
-                h = span;
-            }
-            let t_new = if landing { t_limit } else { t + h };
-            if t + h == t {
-                return Err(SolverError::StepTooSmall { t, step: h });
-            }
+            let (landing, t_new) = trial_step(t, t_limit, &mut h)?;
             self.stage(x, h, &[(0, A21)]);
             self.eval(sys, 1, t + C2 * h, true, x);
             self.stage(x, h, &[(0, A31), (1, A32)]);

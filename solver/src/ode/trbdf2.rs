@@ -19,7 +19,7 @@
 //! at the start of some step, reused with its LU while iterations converge;
 //! a failed iteration first refreshes J (if old), then quarters the step.
 
-use super::{Integrator, OdeSystem, SolverError, Stats, Tolerance, lands, next_step, scaled_rms};
+use super::{Integrator, OdeSystem, SolverError, Stats, Tolerance, next_step, scaled_rms, trial_step};
 use crate::dense_lu::DenseLu;
 
 const GAMMA: f64 = 2.0 - std::f64::consts::SQRT_2;
@@ -130,17 +130,9 @@ impl Integrator {
         if w.lin.lu_h == 0.0 && !w.lin.jac_fresh {
             jacobian(&mut self.stats, sys, w, t, x, rtol, atol);
         }
-        let span = t_limit - t;
         let mut h = self.h_next.min(max_step);
         loop {
-            let landing = lands(h, span);
-            if landing {
-                h = span;
-            }
-            let t_new = if landing { t_limit } else { t + h };
-            if t + h == t {
-                return Err(SolverError::StepTooSmall { t, step: h });
-            }
+            let (landing, t_new) = trial_step(t, t_limit, &mut h)?;
             if w.lin.lu_h != h && !factor(&mut self.stats, &mut w.lin, h) {
                 return Err(SolverError::Singular { t });
             }
