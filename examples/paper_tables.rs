@@ -20,6 +20,29 @@ fn col<'a>(trace: &'a Trace, name: &str) -> Res<&'a [f64]> {
     Ok(trace.column(name).ok_or_else(|| format!("no column {name}"))?)
 }
 
+/// One row of the FLADRC table: the scenario `file` with `sets`.
+fn fladrc_row(label: &str, file: &str, sets: &[(&str, String)]) -> Res<()> {
+    let trace = run(&format!("graphs/fladrc/{file}.yaml"), sets)?;
+    let (t, y, e) = (trace.t(), col(&trace, "y")?, col(&trace, "e")?);
+    let settle = evaluate(Metric::SettlingTime, t, y, &[1.0, 0.02, 0.0, 0.6]);
+    let overshoot = evaluate(Metric::Overshoot, t, y, &[1.0, 0.0, 0.6]);
+    let peak_step = evaluate(Metric::MaxAbs, t, e, &[0.6, 1.2]);
+    // Recovery: time after 0.6 s until |e| stays within 0.02 mm (2 % of the depth).
+    let recovery = evaluate(Metric::SettlingTime, t, e, &[0.0, 0.02, 0.6, 1.2]);
+    let peak_noise = evaluate(Metric::MaxAbs, t, e, &[1.2, 2.0]);
+    let iae = evaluate(Metric::Iae, t, e, &[]);
+    println!(
+        "| {label} | {settle:.4} | {overshoot:.2} | {peak_step:.4} | {recovery:.4} | {peak_noise:.4} | {iae:.4} |"
+    );
+    Ok(())
+}
+
+/// Settling time (2 %) of `file` with `sets`.
+fn settling(file: &str, sets: &[(&str, String)]) -> Res<f64> {
+    let trace = run(&format!("graphs/fladrc/{file}.yaml"), sets)?;
+    Ok(evaluate(Metric::SettlingTime, trace.t(), col(&trace, "y")?, &[1.0, 0.02, 0.0, 0.6]))
+}
+
 fn fladrc() -> Res<()> {
     println!("FLADRC (docs/fladrc.md)\n");
     println!(
@@ -27,18 +50,21 @@ fn fladrc() -> Res<()> {
     );
     println!("|---|---|---|---|---|---|---|");
     for (label, file) in [("FLADRC", "fladrc"), ("LADRC", "ladrc"), ("FPID", "fpid"), ("PID", "pid")] {
-        let trace = run(&format!("graphs/fladrc/{file}.yaml"), &[])?;
-        let (t, y, e) = (trace.t(), col(&trace, "y")?, col(&trace, "e")?);
-        let settle = evaluate(Metric::SettlingTime, t, y, &[1.0, 0.02, 0.0, 0.6]);
-        let overshoot = evaluate(Metric::Overshoot, t, y, &[1.0, 0.0, 0.6]);
-        let peak_step = evaluate(Metric::MaxAbs, t, e, &[0.6, 1.2]);
-        // Recovery: time after 0.6 s until |e| stays within 0.02 mm (2 % of the depth).
-        let recovery = evaluate(Metric::SettlingTime, t, e, &[0.0, 0.02, 0.6, 1.2]);
-        let peak_noise = evaluate(Metric::MaxAbs, t, e, &[1.2, 2.0]);
-        let iae = evaluate(Metric::Iae, t, e, &[]);
-        println!(
-            "| {label} | {settle:.4} | {overshoot:.2} | {peak_step:.4} | {recovery:.4} | {peak_noise:.4} | {iae:.4} |"
-        );
+        fladrc_row(label, file, &[])?;
+    }
+    let gao = [("beta2_factor", "3".to_string())];
+    fladrc_row("FLADRC, Gao's β2 = 3ω0²", "fladrc", &gao)?;
+    fladrc_row("LADRC, Gao's β2 = 3ω0²", "ladrc", &gao)?;
+
+    println!("\nSettling time (2 %) of FLADRC over FPID's, by TD speed factor δ and TD form\n");
+    println!("| δ [mm/s²] | Han's fst (c = x1 + h0·x2) | as printed (c = x1 + h·x2) |");
+    println!("|---|---|---|");
+    let fpid = settling("fpid", &[])?;
+    for delta in ["100", "400", "1e3", "1e4", "1e5"] {
+        let ratio = |printed: &str| -> Res<f64> {
+            Ok(settling("fladrc", &[("delta", delta.to_string()), ("td_printed", printed.to_string())])? / fpid)
+        };
+        println!("| {delta} | {:.3} | {:.3} |", ratio("0")?, ratio("1")?);
     }
     Ok(())
 }

@@ -171,18 +171,21 @@ proptest! {
 
     #[test]
     fn td_reaches_a_constant_reference_without_overshoot(r in -5.0..5.0f64, delta in 1.0e2..1.0e5f64,
-            h in 1.0e-4..1.0e-2f64, k in 2.0..10.0f64, fhan in any::<bool>()) {
+            h in 1.0e-4..1.0e-2f64, k in 2.0..10.0f64, form in prop::sample::select(vec!["fst", "paper", "fhan"])) {
         prop_assume!(r.abs() > 1e-3);
         // Region: δ > 0, h0 = k·h >= 2h (with h0 = h both forms can overshoot by
         // several percent: proptest found r = −1.61, δ = 100, h = 5.2 ms).
         // Time-optimal reach ~2·sqrt(|r|/δ).
-        let form = if fhan { "fhan" } else { "fst" };
         let params = format!("delta: {delta:e}, h0: {:e}, sample_time: {h:e}, form: {form}", k * h);
         let stop = 6.0 * (r.abs() / delta).sqrt() + 400.0 * k * h;
         let trace = run("tracking_differentiator", &params, &[&Signal::constant(r)], stop);
         let (r1, r2) = (trace.column("r1").unwrap(), trace.column("r2").unwrap());
+        // The paper's printed c = x1 + h·x2 overshoots (up to 15.8 % over this
+        // region in a 3000-case sweep; 1.7 % at the FLADRC graphs' δ = 1e4,
+        // h0 = 5h); Han's forms do not.
+        let allowed = if form == "paper" { 0.17 } else { 1e-9 };
         for v in r1 {
-            prop_assert!(v * r.signum() <= r.abs() * (1.0 + 1e-9), "overshoot: {v} past {r}");
+            prop_assert!(v * r.signum() <= r.abs() * (1.0 + allowed), "overshoot: {v} past {r}");
         }
         prop_assert!((r1.last().unwrap() - r).abs() <= 1e-6 * r.abs().max(1.0), "r1 ends at {}", r1.last().unwrap());
         prop_assert!(r2.last().unwrap().abs() <= 1e-3 * (delta * r.abs()).sqrt(), "r2 ends at {}", r2.last().unwrap());

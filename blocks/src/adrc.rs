@@ -18,17 +18,24 @@ pub const TYPES: &[BlockType] = &[
               \x20 d = δ·h0, d0 = h0·d, c = x1 + h0·x2, a0 = sqrt(d² + 8δ|c|),\n\
               \x20 a = x2 + (a0 − d)/2·sign(c) if |c| > d0, else x2 + c/h0,\n\
               \x20 F = −δ·sign(a) if |a| > d, else −δ·a/d.\n\
-              The paper prints c = x1 + h·x2; Han's original, implemented here, has c = x1 + h0·x2 \
-              (the two agree for h0 = h). `form: fhan`: Han's later fhan(x1, x2, δ, h0), exact for the \
+              The paper prints c = x1 + h·x2 with h the sample time; Han's original, the default here, \
+              has c = x1 + h0·x2 (the two agree for h0 = h). `form: paper` is fst with the printed \
+              c = x1 + h·x2; in general `c_step` sets the step in c (default h0; `form: paper` makes it h), \
+              so a graph can switch forms through a numeric parameter. `form: fhan`: Han's later \
+              fhan(x1, x2, δ, h0), exact for the \
               discrete double integrator. δ is the largest acceleration of r1 (speed factor); h0 >= h \
               filters noise on r (filter factor). Outputs are the states: no direct feedthrough.\n\
-              Stable region: δ > 0, h0 >= 2h; then r1 reaches a constant r without overshoot and r2 → 0 (with h0 = h both forms can overshoot by a few percent).",
+              Stable region: δ > 0, h0 >= 2h; then r1 reaches a constant r without overshoot and r2 → 0 (with h0 = h both forms can overshoot by a few percent). \
+              `form: paper` (c_step = h < h0) converges in the same region but overshoots: by 1.7 % for \
+              δ = 1e4, h = 0.1 ms, h0 = 5h, growing with δ·h0² to about 16 % (a sweep over δ in [1e2, \
+              1e5], h in [0.1, 10] ms, h0 in [2h, 10h]).",
         inputs: &[PortDoc { name: "r", doc: "reference (scalar)" }],
         outputs: &[PortDoc { name: "r1", doc: "tracked reference" }, PortDoc { name: "r2", doc: "its derivative" }],
         params: &[
             param("delta", None, "speed factor δ > 0: largest |dr2/dt| [units/s²]"),
             param("h0", Some("2·sample_time"), "filter factor h0 > 0 [s]; >= 2·sample_time avoids overshoot"),
-            param("form", Some("fst"), "fst (the paper's eq. 7) | fhan (Han's later form)"),
+            param("form", Some("fst"), "fst (Han's, c = x1 + h0·x2) | paper (eq. 7 as printed, c = x1 + h·x2) | fhan"),
+            param("c_step", Some("h0"), "the step in c = x1 + c_step·x2 of fst (paper: h); > 0 [s]"),
             param("initial", Some("0"), "r1(0)"),
             crate::SAMPLE_TIME_REQUIRED,
         ],
@@ -92,11 +99,12 @@ pub const TYPES: &[BlockType] = &[
 ];
 
 /// Han's time-optimal synthesis function fst(x1, x2, δ, h0) with
-/// c = x1 + h0·x2 (see the block doc).
-pub fn fst(x1: f64, x2: f64, delta: f64, h0: f64) -> f64 {
+/// c = x1 + c_step·x2: Han's original has c_step = h0, the paper prints
+/// the sample time h (see the block doc).
+pub fn fst(x1: f64, x2: f64, delta: f64, h0: f64, c_step: f64) -> f64 {
     let d = delta * h0;
     let d0 = h0 * d;
-    let c = x1 + h0 * x2;
+    let c = x1 + c_step * x2;
     let a0 = (d * d + 8.0 * delta * c.abs()).sqrt();
     let a = if c.abs() > d0 { x2 + (a0 - d) / 2.0 * sign(c) } else { x2 + c / h0 };
     if a.abs() > d { -delta * sign(a) } else { -delta * a / d }
@@ -121,20 +129,27 @@ pub struct TrackingDifferentiator {
     pub h0: f64,
     pub h: f64,
     pub fhan: bool,
+    /// The step in c = x1 + c_step·x2 of fst.
+    pub c_step: f64,
     pub initial: f64,
     r1: f64,
     r2: f64,
 }
 
 impl TrackingDifferentiator {
+    /// Han's forms (fst with c_step = h0, or fhan).
     pub fn new(delta: f64, h0: f64, h: f64, fhan: bool, initial: f64) -> Self {
-        TrackingDifferentiator { delta, h0, h, fhan, initial, r1: initial, r2: 0.0 }
+        TrackingDifferentiator { delta, h0, h, fhan, c_step: h0, initial, r1: initial, r2: 0.0 }
     }
 
     /// One step with reference `r`; returns the new (r1, r2).
     pub fn step(&mut self, r: f64) -> (f64, f64) {
         let x1 = self.r1 - r;
-        let f = if self.fhan { fhan(x1, self.r2, self.delta, self.h0) } else { fst(x1, self.r2, self.delta, self.h0) };
+        let f = if self.fhan {
+            fhan(x1, self.r2, self.delta, self.h0)
+        } else {
+            fst(x1, self.r2, self.delta, self.h0, self.c_step)
+        };
         self.r1 += self.h * self.r2;
         self.r2 += self.h * f;
         (self.r1, self.r2)
@@ -160,13 +175,20 @@ fn build_td(p: &mut Params) -> Result<Built, Diagnostic> {
     let st = p.discrete_sample_time()?;
     let h = st.period().unwrap_or(0.0);
     let h0 = p.number_where("h0", Some(2.0 * h), |v| v > 0.0 && v.is_finite(), "a positive filter factor")?;
-    let fhan = p.choice("form", &["fst", "fhan"])? == "fhan";
+    let form = p.choice("form", &["fst", "paper", "fhan"])?;
+    let c_default = if form == "paper" { h } else { h0 };
+    let c_step = p.number_where("c_step", Some(c_default), |v| v > 0.0 && v.is_finite(), "a positive step [s]")?;
+    if form == "fhan" && p.has("c_step") {
+        return Err(p.error("c_step", "`c_step` belongs to fst (form: fst or paper), not to fhan"));
+    }
     let initial = p.number_or("initial", 0.0)?;
     let iface = Interface::new(st)
         .input("r", Width::Fixed(1), false)
         .output("r1", Width::Fixed(1))
         .output("r2", Width::Fixed(1));
-    Ok(Built::new(TrackingDifferentiator::new(delta, h0, h, fhan, initial), iface))
+    let mut td = TrackingDifferentiator::new(delta, h0, h, form == "fhan", initial);
+    td.c_step = c_step;
+    Ok(Built::new(td, iface))
 }
 
 /// Binomial coefficient C(n, k) as f64 (small n).

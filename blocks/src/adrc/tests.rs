@@ -11,10 +11,10 @@ fn fst_first_steps_by_hand() {
     let mut td = TrackingDifferentiator::new(100.0, 0.01, 0.01, false, 0.0);
     assert_eq!(td.step(1.0), (0.0, 1.0));
     assert_eq!(td.step(1.0), (0.01, 2.0));
-    assert_eq!(fst(-1.0, 0.0, 100.0, 0.01), 100.0);
+    assert_eq!(fst(-1.0, 0.0, 100.0, 0.01, 0.01), 100.0);
     // Inside the linear zone F = −δ·a/d with a = x2 + c/h0.
     let (x1, x2) = (1e-5, 0.0);
-    assert!((fst(x1, x2, 100.0, 0.01) - (-100.0 * (x1 / 0.01) / 1.0)).abs() < 1e-12);
+    assert!((fst(x1, x2, 100.0, 0.01, 0.01) - (-100.0 * (x1 / 0.01) / 1.0)).abs() < 1e-12);
 }
 
 fn track(form_fhan: bool, target: f64) -> (f64, f64, f64) {
