@@ -86,7 +86,49 @@ fn contact_force() -> Res<()> {
     Ok(())
 }
 
+/// The paper's comparison with a ±10 V amplifier, by protection.
+fn amplifier_limit() -> Res<()> {
+    println!("\nContact force with a ±10 V amplifier (docs/contact-force.md), from 1 s on\n");
+    println!("| k_e [N/mm] | amplifier | protection | inner loop | max \\|ef\\| [N] | RMS ef [N] | fn range [N] |");
+    println!("|---|---|---|---|---|---|---|");
+    let setups: [(&str, &str, [(&str, &str); 3]); 5] = [
+        ("unlimited", "none", [("u_max", "inf"), ("approach", "0"), ("anti_windup", "0")]),
+        ("±10 V", "none", [("u_max", "10"), ("approach", "0"), ("anti_windup", "0")]),
+        ("±10 V", "approach phase", [("u_max", "10"), ("approach", "1"), ("anti_windup", "0")]),
+        ("±10 V", "anti-windup", [("u_max", "10"), ("approach", "0"), ("anti_windup", "1")]),
+        ("±10 V", "both", [("u_max", "10"), ("approach", "1"), ("anti_windup", "1")]),
+    ];
+    let rows = |k_e: u32, amplifier: &str, protection: &str, sets: &[(&str, &str)]| -> Res<()> {
+        for kind in ["smc", "pid"] {
+            let mut sets: Vec<(&str, String)> = sets.iter().map(|&(n, v)| (n, v.to_string())).collect();
+            sets.push(("k_e", k_e.to_string()));
+            let trace = run(&format!("graphs/contact-force/impedance_{kind}.yaml"), &sets)?;
+            let (t, ef, fn_) = (trace.t(), col(&trace, "ef")?, col(&trace, "fn")?);
+            let w = [1.0, 10.0];
+            let (max_ef, rms_ef) = (evaluate(Metric::MaxAbs, t, ef, &w), evaluate(Metric::Rms, t, ef, &w));
+            let (lo, hi) = (evaluate(Metric::Min, t, fn_, &w), evaluate(Metric::Max, t, fn_, &w));
+            let cell = |v: f64| if v.abs() < 1e6 { format!("{v:.2}") } else { "diverges".to_string() };
+            let range = if hi.abs() < 1e6 { format!("{lo:.1} – {hi:.1}") } else { "diverges".to_string() };
+            println!(
+                "| {k_e} | {amplifier} | {protection} | {} | {} | {} | {range} |",
+                kind.to_uppercase(),
+                cell(max_ef),
+                cell(rms_ef)
+            );
+        }
+        Ok(())
+    };
+    for (amplifier, protection, sets) in &setups {
+        rows(200, amplifier, protection, sets)?;
+    }
+    for k_e in [20, 50, 100, 500] {
+        rows(k_e, "±10 V", "anti-windup", &setups[3].2)?;
+    }
+    Ok(())
+}
+
 fn main() -> Res<()> {
     fladrc()?;
-    contact_force()
+    contact_force()?;
+    amplifier_limit()
 }

@@ -26,15 +26,22 @@ pub const TYPES: &[BlockType] = &[
               The contact-force paper's eq. 11–12 drops T and has sign slips; these are the forms \
               derived properly. Both discrete forms have direct feedthrough. Units: x in the length \
               unit of k (k in N/mm gives x in mm).\n\
+              `hold_input: true` adds a `hold` input: while it is nonzero the filter's state stands \
+              still and its output holds its last value (conditional integration: anti-windup while \
+              the drive saturates, or a force loop kept open until contact).\n\
               Stable region: m, b, k > 0 (every form; bilinear preserves stability for every T, \
               backward Euler too). The step response settles at e/k.",
-        inputs: &[PortDoc { name: "e", doc: "force error (scalar)" }],
+        inputs: &[
+            PortDoc { name: "e", doc: "force error (scalar)" },
+            PortDoc { name: "hold", doc: "with `hold_input: true`: nonzero freezes the filter" },
+        ],
         outputs: &[PortDoc { name: "x", doc: "position correction" }],
         params: &[
             param("m", None, "target mass, > 0"),
             param("b", None, "target damping, > 0"),
             param("k", None, "target stiffness, > 0"),
             param("method", Some("bilinear"), "discrete form: bilinear | backward_euler"),
+            param("hold_input", Some("false"), "true adds the `hold` input (conditional integration)"),
             param("sample_time", Some("0"), "0 continuous, T > 0 discrete"),
         ],
         build: build_impedance,
@@ -175,8 +182,36 @@ impl Block for Impedance {
         io.set(0, io.x[0]);
     }
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
-        dx[0] = io.x[1];
-        dx[1] = (io.u(0) - self.b * io.x[1] - self.k * io.x[0]) / self.m;
+        let held = io.num_inputs() > 1 && io.u(1) != 0.0;
+        dx[0] = if held { 0.0 } else { io.x[1] };
+        dx[1] = if held { 0.0 } else { (io.u(0) - self.b * io.x[1] - self.k * io.x[0]) / self.m };
+    }
+}
+
+/// A discrete filter whose state stands still and output holds while its
+/// `hold` input (port 1) is nonzero.
+struct Holdable {
+    filter: DiscreteLti,
+    last: f64,
+}
+
+impl Block for Holdable {
+    fn initialize(&mut self, x0: &mut [f64]) {
+        self.filter.initialize(x0);
+        self.last = 0.0;
+    }
+    fn output(&mut self, io: &mut Io) {
+        if io.u(1) == 0.0 {
+            self.filter.output(io);
+            self.last = io.output(0)[0];
+        } else {
+            io.set(0, self.last);
+        }
+    }
+    fn update(&mut self, io: &mut Io) {
+        if io.u(1) == 0.0 {
+            self.filter.update(io);
+        }
     }
 }
 
@@ -195,17 +230,19 @@ pub fn discrete_impedance(m: f64, b: f64, k: f64, t: f64, bilinear: bool) -> (Ve
 fn build_impedance(p: &mut Params) -> Result<Built, Diagnostic> {
     let (m, b, k) = (p.positive("m")?, p.positive("b")?, p.positive("k")?);
     let bilinear = p.choice("method", &["bilinear", "backward_euler"])? == "bilinear";
+    let hold = p.bool_or("hold_input", false)?;
     let (st, period) = p.continuous_or_discrete()?;
+    let mut iface = Interface::new(st).input("e", Width::Fixed(1), period.is_some());
+    if hold {
+        iface = iface.input("hold", Width::Fixed(1), period.is_some());
+    }
+    let iface = iface.output("x", Width::Fixed(1));
     match period {
-        None => {
-            let iface = Interface::new(st).input("e", Width::Fixed(1), false).output("x", Width::Fixed(1));
-            Ok(Built::new(Impedance { m, b, k }, iface))
-        }
+        None => Ok(Built::new(Impedance { m, b, k }, iface)),
         Some(period) => {
             let (num, den) = discrete_impedance(m, b, k, period, bilinear);
-            let ss = tf2ss(&num, &den).map_err(|e| p.error("m", e))?;
-            let iface = Interface::new(st).input("e", Width::Fixed(1), true).output("x", Width::Fixed(1));
-            Ok(Built::new(DiscreteLti::new(ss), iface))
+            let filter = DiscreteLti::new(tf2ss(&num, &den).map_err(|e| p.error("m", e))?);
+            if hold { Ok(Built::new(Holdable { filter, last: 0.0 }, iface)) } else { Ok(Built::new(filter, iface)) }
         }
     }
 }
