@@ -86,12 +86,15 @@ fn contact_force() -> Res<()> {
     Ok(())
 }
 
+/// A drive setup: amplifier, protection, and the parameters that make it.
+type Setup = (&'static str, &'static str, [(&'static str, &'static str); 3]);
+
 /// The paper's comparison with a ±10 V amplifier, by protection.
 fn amplifier_limit() -> Res<()> {
     println!("\nContact force with a ±10 V amplifier (docs/contact-force.md), from 1 s on\n");
     println!("| k_e [N/mm] | amplifier | protection | inner loop | max \\|ef\\| [N] | RMS ef [N] | fn range [N] |");
     println!("|---|---|---|---|---|---|---|");
-    let setups: [(&str, &str, [(&str, &str); 3]); 5] = [
+    let setups: [Setup; 5] = [
         ("unlimited", "none", [("u_max", "inf"), ("approach", "0"), ("anti_windup", "0")]),
         ("±10 V", "none", [("u_max", "10"), ("approach", "0"), ("anti_windup", "0")]),
         ("±10 V", "approach phase", [("u_max", "10"), ("approach", "1"), ("anti_windup", "0")]),
