@@ -282,6 +282,7 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
             error: result.as_ref().err().map(ToString::to_string),
             warnings: sim.warnings(),
             checks: &results,
+            columns: &sim.model().columns,
         };
         let text = serde_json::to_string_pretty(&to_json(&info)).unwrap_or_default();
         write_atomic(path, text.as_bytes()).map_err(io_error(path))?;
@@ -289,10 +290,15 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
     result.map_err(|e| Failure::Run(e.to_string()))?;
     if let (Some(c), Some(path)) = (csv, opts.out) {
         c.commit().map_err(io_error(path))?;
+        if let Some(units) = ctlgraph::record::units_csv(&sim.model().columns) {
+            let sidecar = ctlgraph::record::units_path(path);
+            write_atomic(&sidecar, units.as_bytes()).map_err(io_error(&sidecar))?;
+        }
     }
     if let (Some(tr), Some(path)) = (&trace, opts.plot) {
         let title = sim.model().name.clone().unwrap_or_else(|| graph.display().to_string());
-        let svg = ctlgraph::plot::render_svg(tr, &title).map_err(Failure::Run)?;
+        let model = sim.model();
+        let svg = ctlgraph::plot::render_svg(tr, &title, &model.scopes, &model.columns).map_err(Failure::Run)?;
         write_atomic(path, svg.as_bytes()).map_err(io_error(path))?;
     }
     let simulated = sim.time();

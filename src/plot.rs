@@ -1,8 +1,11 @@
 //! SVG plots of recorded signals (plotters, SVG backend, no system fonts):
-//! one panel per recorded name, stacked over a shared time axis, each with
-//! its own y range, grid and legend.
+//! the graph's `scopes:` panels, or without them one panel per recorded
+//! name, stacked over a shared time axis, each with its own y range, grid,
+//! legend and unit.
 
 use crate::record::Trace;
+use ctlgraph_core::compile::Column;
+use ctlgraph_core::scope::Scope;
 use plotters::prelude::*;
 
 /// At most this many points per series reach the SVG; longer series are
@@ -11,57 +14,156 @@ const MAX_POINTS: usize = 2000;
 const PANEL_HEIGHT: u32 = 220;
 const WIDTH: u32 = 1000;
 
-/// Renders `trace` as an SVG document titled `title`.
-pub fn render_svg(trace: &Trace, title: &str) -> Result<String, String> {
-    let groups = groups(trace);
-    if groups.is_empty() {
+/// One panel to draw: its trace columns and how to draw them.
+struct Panel {
+    title: Option<String>,
+    columns: Vec<usize>,
+    y_desc: String,
+    y_limits: Option<[f64; 2]>,
+    window: Option<[f64; 2]>,
+    band: Option<[f64; 2]>,
+}
+
+/// Renders `trace` as an SVG document titled `title`: the panels of
+/// `scopes`, or one per recorded name; `columns` give the units.
+pub fn render_svg(trace: &Trace, title: &str, scopes: &[Scope], columns: &[Column]) -> Result<String, String> {
+    let panels = if scopes.is_empty() { default_panels(trace, columns) } else { scope_panels(trace, scopes, columns) };
+    if panels.is_empty() {
         return Err("nothing recorded to plot".into());
     }
-    let height = 60 + PANEL_HEIGHT * groups.len() as u32;
+    let title_space = |p: &Panel| if p.title.is_some() { 24 } else { 0 };
+    let height = 60 + panels.iter().map(|p| PANEL_HEIGHT + title_space(p)).sum::<u32>();
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (WIDTH, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let root = root.titled(title, ("sans-serif", 22)).map_err(|e| e.to_string())?;
-        let panels = root.split_evenly((groups.len(), 1));
+        let mut rest = root.titled(title, ("sans-serif", 22)).map_err(|e| e.to_string())?;
         let t = trace.t();
-        let (t0, t1) = (t[0], *t.last().unwrap_or(&t[0]));
-        let t1 = if t1 > t0 { t1 } else { t0 + 1.0 };
-        for ((name, cols), panel) in groups.iter().zip(&panels) {
-            let (lo, hi) = y_range(trace, cols);
-            let mut chart = ChartBuilder::on(panel)
-                .margin(12)
-                .x_label_area_size(36)
-                .y_label_area_size(70)
-                .build_cartesian_2d(t0..t1, lo..hi)
-                .map_err(|e| e.to_string())?;
-            chart
-                .configure_mesh()
-                .x_desc("t [s]")
-                .y_desc(name.as_str())
-                .light_line_style(RGBColor(235, 235, 235))
-                .draw()
-                .map_err(|e| e.to_string())?;
-            for (k, &c) in cols.iter().enumerate() {
-                let color = Palette99::pick(k).to_rgba();
-                let points = reduce(t, &trace.columns[c]);
-                chart
-                    .draw_series(LineSeries::new(points, color.stroke_width(2)))
-                    .map_err(|e| e.to_string())?
-                    .label(trace.headers[c].as_str())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
-            }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
-                .map_err(|e| e.to_string())?;
+        for p in &panels {
+            let (area, below) = rest.split_vertically(PANEL_HEIGHT + title_space(p));
+            rest = below;
+            draw_panel(&area, trace, t, p)?;
         }
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)
+}
+
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    trace: &Trace,
+    t: &[f64],
+    p: &Panel,
+) -> Result<(), String> {
+    let (t0, t1) = match p.window {
+        Some([a, b]) => (a, b),
+        None => (t[0], *t.last().unwrap_or(&t[0])),
+    };
+    let t1 = if t1 > t0 { t1 } else { t0 + 1.0 };
+    // The samples in the window, and one on each side so lines reach its edges.
+    let first = t.partition_point(|&x| x < t0).saturating_sub(1);
+    let last = (t.partition_point(|&x| x <= t1) + 1).min(t.len());
+    let (lo, hi) = match p.y_limits {
+        Some([a, b]) => (a, b),
+        None => y_range(p.columns.iter().map(|&c| &trace.columns[c][first..last]), p.band),
+    };
+    let mut builder = ChartBuilder::on(area);
+    builder.margin(12).x_label_area_size(36).y_label_area_size(70);
+    if let Some(title) = &p.title {
+        builder.caption(title, ("sans-serif", 17));
+    }
+    let mut chart = builder.build_cartesian_2d(t0..t1, lo..hi).map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc("t [s]")
+        .y_desc(p.y_desc.as_str())
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    if let Some([a, b]) = p.band {
+        let shade = RGBColor(60, 160, 60).mix(0.12);
+        chart
+            .draw_series([Rectangle::new([(t0, a), (t1, b)], shade.filled())])
+            .map_err(|e| e.to_string())?
+            .label(format!("band [{a}, {b}]"))
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 18, y + 5)], shade.filled()));
+    }
+    for (k, &c) in p.columns.iter().enumerate() {
+        let color = Palette99::pick(k).to_rgba();
+        let points = reduce(&t[first..last], &trace.columns[c][first..last]);
+        chart
+            .draw_series(LineSeries::new(points, color.stroke_width(2)))
+            .map_err(|e| e.to_string())?
+            .label(trace.headers[c].as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// `label [unit]`, or the label alone.
+fn with_unit(label: &str, unit: Option<&str>) -> String {
+    match unit {
+        Some(u) => format!("{label} [{u}]"),
+        None => label.to_string(),
+    }
+}
+
+/// The unit the named records share, if they all have the same one.
+fn common_unit<'a>(names: impl Iterator<Item = &'a str>, columns: &'a [Column]) -> Option<&'a str> {
+    let mut units = names.map(|n| columns.iter().find(|c| c.name == n).and_then(|c| c.unit.as_deref()));
+    let first = units.next()??;
+    units.all(|u| u == Some(first)).then_some(first)
+}
+
+/// Trace columns of record `name` (all elements of a vector).
+fn trace_columns(trace: &Trace, name: &str) -> Vec<usize> {
+    let base = |h: &str| h.split('[').next().unwrap_or(h).to_string();
+    (1..trace.headers.len()).filter(|&i| base(&trace.headers[i]) == name).collect()
+}
+
+fn scope_panels(trace: &Trace, scopes: &[Scope], columns: &[Column]) -> Vec<Panel> {
+    scopes
+        .iter()
+        .map(|s| {
+            let names = || s.signals.iter().map(|(n, _)| n.as_str());
+            let label = s.y_label.clone().unwrap_or_else(|| names().collect::<Vec<_>>().join(", "));
+            let unit = s.unit.as_deref().or_else(|| common_unit(names(), columns));
+            Panel {
+                title: s.title.clone(),
+                columns: names().flat_map(|n| trace_columns(trace, n)).collect(),
+                y_desc: with_unit(&label, unit),
+                y_limits: s.y_limits,
+                window: s.window,
+                band: s.band,
+            }
+        })
+        .collect()
+}
+
+fn default_panels(trace: &Trace, columns: &[Column]) -> Vec<Panel> {
+    let base = |h: &str| h.split('[').next().unwrap_or(h).to_string();
+    groups(trace)
+        .into_iter()
+        .map(|(name, cols)| {
+            let records: Vec<String> = cols.iter().map(|&c| base(&trace.headers[c])).collect();
+            let unit = common_unit(records.iter().map(String::as_str), columns);
+            Panel {
+                title: None,
+                y_desc: with_unit(&name, unit),
+                columns: cols,
+                y_limits: None,
+                window: None,
+                band: None,
+            }
+        })
+        .collect()
 }
 
 /// Columns grouped into panels: elements of a vector (`x[1]`, `x[2]`)
@@ -85,14 +187,18 @@ fn groups(trace: &Trace) -> Vec<(String, Vec<usize>)> {
     out
 }
 
-fn y_range(trace: &Trace, cols: &[usize]) -> (f64, f64) {
-    let values = cols.iter().flat_map(|&c| trace.columns[c].iter().copied()).filter(|v| v.is_finite());
-    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
+/// The series' finite range (and the band's), padded by 5 %.
+fn y_range<'a>(series: impl Iterator<Item = &'a [f64]>, band: Option<[f64; 2]>) -> (f64, f64) {
+    let values = series.flat_map(|y| y.iter().copied()).chain(band.into_iter().flatten());
+    let (lo, hi) =
+        values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
     if !lo.is_finite() {
         return (-1.0, 1.0);
     }
-    let pad = if hi > lo { 0.05 * (hi - lo) } else { lo.abs().max(1.0) * 0.1 };
-    (lo - pad, hi + pad)
+    // Halved before subtracting, so ranges near ±f64::MAX do not overflow.
+    let half_span = 0.5 * hi - 0.5 * lo;
+    let pad = if half_span > 0.0 { 0.1 * half_span } else { lo.abs().max(1.0) * 0.1 };
+    ((lo - pad).max(f64::MIN), (hi + pad).min(f64::MAX))
 }
 
 /// Min/max per bucket, in time order, for long series; then points that

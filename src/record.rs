@@ -88,3 +88,32 @@ pub fn write_atomic(dest: &Path, bytes: &[u8]) -> std::io::Result<()> {
     }
     result
 }
+
+/// The units of the recorded columns as a two-row CSV aligned with the
+/// data's header (`t,y,u` over `s,mm,V`; empty where a record has no
+/// unit), or `None` when no record has one.
+pub fn units_csv(columns: &[ctlgraph_core::compile::Column]) -> Option<String> {
+    if columns.iter().all(|c| c.unit.is_none()) {
+        return None;
+    }
+    let (mut names, mut units) = (vec!["t".to_string()], vec!["s".to_string()]);
+    for c in columns {
+        let unit = c.unit.clone().unwrap_or_default();
+        if c.width == 1 {
+            names.push(c.name.clone());
+            units.push(unit);
+        } else {
+            for k in 1..=c.width {
+                names.push(format!("{}[{k}]", c.name));
+                units.push(unit.clone());
+            }
+        }
+    }
+    Some(format!("{}\n{}\n", names.join(","), units.join(",")))
+}
+
+/// Where the units of the CSV at `data` go: `run.csv` → `run.units.csv`.
+pub fn units_path(data: &Path) -> std::path::PathBuf {
+    let stem = data.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    data.with_file_name(format!("{stem}.units.csv"))
+}

@@ -19,6 +19,7 @@ pub struct RunInfo<'a> {
     pub error: Option<String>,
     pub warnings: &'a [String],
     pub checks: &'a [CheckResult],
+    pub columns: &'a [ctlgraph_core::compile::Column],
 }
 
 /// SHA-256 of the graph file, lowercase hex.
@@ -65,6 +66,7 @@ pub fn to_json(info: &RunInfo) -> Value {
         "status": if info.error.is_some() { "failed" } else if info.checks.iter().any(|c| !c.passed) { "checks failed" } else { "ok" },
         "error": info.error,
         "warnings": info.warnings,
+        "columns": info.columns.iter().map(|c| json!({ "name": c.name, "width": c.width, "unit": c.unit })).collect::<Vec<_>>(),
     })
 }
 

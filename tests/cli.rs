@@ -172,3 +172,43 @@ fn events_and_newton_work_are_reported() {
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("chatters") && text(&out.stderr).contains("adaptive"), "{}", text(&out.stderr));
 }
+
+#[test]
+fn scopes_draw_their_panels_with_units_and_the_csv_gets_its_units() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = dir.path().join("scoped.yaml");
+    std::fs::write(
+        &graph,
+        "simulation: { stop: 1.0, solver: { method: rk4, step: 1.0e-3 } }\n\
+         blocks:\n  u: { type: step, at: 0.1 }\n  plant: { type: transfer_function, num: [1], den: [0.1, 1] }\n\
+         wires: [u -> plant]\n\
+         record:\n  - { u, unit: V }\n  - { y: plant, unit: mm }\n\
+         scopes:\n  - { title: Command panel, signals: [u], y_label: command }\n\
+         \x20 - { title: Response panel, signals: [u, y], y_label: position, unit: mm, band: [0.9, 1.1], window: [0, 0.5] }\n",
+    )
+    .unwrap();
+    let (csv, svg) = (dir.path().join("run.csv"), dir.path().join("run.svg"));
+    let out = ctlgraph(&["run", path(&graph), "--out", path(&csv), "--plot", path(&svg)]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let svg = std::fs::read_to_string(&svg).unwrap();
+    for expected in [
+        "Command panel",
+        "Response panel",
+        "command [V]",
+        "position [mm]",
+        "band [0.9, 1.1]",
+        "\nu\n</text>",
+        "\ny\n</text>",
+    ] {
+        assert!(svg.contains(expected), "the SVG lacks `{expected}`");
+    }
+    // Two panels: two time axes.
+    assert_eq!(svg.matches("t [s]").count(), 2);
+    let units = std::fs::read_to_string(dir.path().join("run.units.csv")).unwrap();
+    assert_eq!(units, "t,u,y\ns,V,mm\n");
+    // Without scopes or units: one panel per name, no units file.
+    let plain = dir.path().join("plain.csv");
+    let out = ctlgraph(&["run", LAG, "--out", path(&plain)]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(!dir.path().join("plain.units.csv").exists());
+}

@@ -262,3 +262,18 @@ fn event_stiff_and_delay_settings_are_checked() {
         Some("rising"),
     );
 }
+
+#[test]
+fn scope_and_unit_mistakes_are_positioned() {
+    let base = "blocks:\n  u: { type: step }\nrecord:\n  - { u, unit: V }\nscopes:\n";
+    let unknown = format!("{base}  - {{ signals: [u, v] }}\n");
+    check(&unknown, 6, col(&unknown, 6, "v]"), "scope: `v` is not recorded", Some("did you mean `u`?"));
+    let key = format!("{base}  - {{ signals: [u], ylabel: x }}\n");
+    check(&key, 6, col(&key, 6, "ylabel"), "unknown key `ylabel` in a scope", Some("y_label"));
+    let limits = format!("{base}  - {{ signals: [u], y_limits: [1, 0] }}\n");
+    check(&limits, 6, col(&limits, 6, "[1, 0]"), "scope `y_limits` must be finite with low < high", None);
+    let empty = format!("{base}  - {{ title: x }}\n");
+    check(&empty, 6, col(&empty, 6, "{ title"), "a scope needs `signals:", None);
+    let two = "blocks:\n  u: { type: step }\nrecord:\n  - { a: u, b: u }\n";
+    check(two, 4, col(two, 4, "{ a"), "a record entry names one signal", None);
+}

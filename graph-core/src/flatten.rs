@@ -69,11 +69,13 @@ pub struct FlatGraph {
     pub sim: SimConfig,
     pub blocks: Vec<FlatBlock>,
     pub wires: Vec<FlatWire>,
-    pub records: Vec<(String, Endpoint)>,
+    pub records: Vec<crate::spec::RecordSpec>,
     pub record_every: usize,
     /// The top-level file's checks (a subsystem's own checks are not run
     /// when it is included).
     pub checks: Vec<crate::checks::CheckSpec>,
+    /// The top-level file's plot panels, evaluated.
+    pub scopes: Vec<crate::scope::Scope>,
     /// Subsystem path → its (inports, outports), for resolving records.
     pub subsystems: HashMap<String, (Vec<String>, Vec<String>)>,
 }
@@ -120,13 +122,20 @@ pub fn load_str(text: &str, file: Arc<str>, overrides: &[(String, String)]) -> R
         records: Vec::new(),
         record_every: graph.record_every.as_ref().map_or(1, |e| e.0),
         checks: graph.checks.clone(),
+        scopes: Vec::new(),
         subsystems: HashMap::new(),
     };
+    let number = |v: &Yaml, key: &str| -> Result<f64, Diagnostic> {
+        match &v.kind {
+            Kind::Num(x) => Ok(*x),
+            Kind::Str(s) => eval_number(s, &v.pos, &scope),
+            _ => Err(Diagnostic::at(&v.pos, format!("scope `{key}`: expected a number, found {}", v.describe()))),
+        }
+    };
+    out.scopes = graph.scopes.iter().map(|s| s.evaluate(&number)).collect::<Result<_, _>>()?;
     let mut stack = vec![canonical(Path::new(&*file))];
     expand(&graph, "", scope, dir, &mut out, &mut stack)?;
-    for rec in &graph.record {
-        out.records.push((rec.name.clone(), rec.signal.clone()));
-    }
+    out.records = graph.record.clone();
     Ok(out)
 }
 

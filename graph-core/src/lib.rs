@@ -14,6 +14,7 @@ pub mod expr;
 pub mod flatten;
 pub mod params;
 pub mod registry;
+pub mod scope;
 pub mod sim;
 pub mod spec;
 pub mod trace;

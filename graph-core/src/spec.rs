@@ -4,10 +4,12 @@
 
 use crate::checks::CheckSpec;
 use crate::diag::{Diagnostic, Pos};
+use crate::scope::{self, ScopeSpec};
 use crate::yaml::{self, Key, Kind, Yaml};
 use std::sync::Arc;
 
-const TOP_KEYS: [&str; 8] = ["name", "description", "parameters", "simulation", "blocks", "wires", "record", "checks"];
+const TOP_KEYS: [&str; 9] =
+    ["name", "description", "parameters", "simulation", "blocks", "wires", "record", "checks", "scopes"];
 
 /// One graph file.
 #[derive(Clone, Debug)]
@@ -25,6 +27,8 @@ pub struct GraphFile {
     pub record_every: Option<(usize, Pos)>,
     /// Acceptance conditions over the recorded signals.
     pub checks: Vec<CheckSpec>,
+    /// Plot panels.
+    pub scopes: Vec<ScopeSpec>,
 }
 
 #[derive(Clone, Debug)]
@@ -61,11 +65,12 @@ pub struct WireSpec {
     pub dsts: Vec<Endpoint>,
 }
 
-/// A recorded signal and its column name.
+/// A recorded signal, its column name and optional unit.
 #[derive(Clone, Debug)]
 pub struct RecordSpec {
     pub name: String,
     pub signal: Endpoint,
+    pub unit: Option<String>,
 }
 
 impl GraphFile {
@@ -108,8 +113,13 @@ impl GraphFile {
             Some(c) => seq(c, "`checks`")?.iter().map(parse_check).collect::<Result<_, _>>()?,
             None => Vec::new(),
         };
+        let scopes = match yaml::lookup(top, "scopes") {
+            Some(v) => scope::parse(v)?,
+            None => Vec::new(),
+        };
         Ok(GraphFile {
             checks,
+            scopes,
             name: text_of("name")?,
             description: text_of("description")?,
             parameters,
@@ -243,16 +253,36 @@ fn parse_record(v: &Yaml) -> Result<Records, Diagnostic> {
     let mut out = Vec::new();
     for item in list {
         match &item.kind {
-            Kind::Str(s) => {
-                out.push(RecordSpec { name: s.trim().to_string(), signal: parse_endpoint(s, item.pos.clone())? })
-            }
-            Kind::Map(m) if m.len() == 1 => {
-                let (k, sig) = &m[0];
-                let s = sig.expect_str("a recorded signal")?;
-                out.push(RecordSpec { name: k.name.clone(), signal: parse_endpoint(s, sig.pos.clone())? });
+            Kind::Str(s) => out.push(RecordSpec {
+                name: s.trim().to_string(),
+                signal: parse_endpoint(s, item.pos.clone())?,
+                unit: None,
+            }),
+            // `name: block.port`, `{ name: block.port, unit: mm }` or `{ block.port, unit: mm }`.
+            Kind::Map(m) if !m.is_empty() && m.len() <= 2 => {
+                let unit = match yaml::lookup(m, "unit") {
+                    Some(u) => Some(u.expect_str("a unit")?.to_string()),
+                    None => None,
+                };
+                let entries: Vec<_> = m.iter().filter(|(k, _)| k.name != "unit").collect();
+                let [(k, sig)] = entries.as_slice() else {
+                    return Err(Diagnostic::at(
+                        &item.pos,
+                        "a record entry names one signal (and optionally its `unit`)",
+                    ));
+                };
+                let (s, pos) = match &sig.kind {
+                    Kind::Null => (k.name.as_str(), k.pos.clone()),
+                    _ => (sig.expect_str("a recorded signal")?, sig.pos.clone()),
+                };
+                let name = if sig.kind == Kind::Null { s.trim().to_string() } else { k.name.clone() };
+                out.push(RecordSpec { name, signal: parse_endpoint(s, pos)?, unit });
             }
             _ => {
-                return Err(Diagnostic::at(&item.pos, "a record entry is `block.port` or `name: block.port`"));
+                return Err(Diagnostic::at(
+                    &item.pos,
+                    "a record entry is `block.port`, `name: block.port` or `{ name: block.port, unit: mm }`",
+                ));
             }
         }
     }

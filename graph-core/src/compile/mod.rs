@@ -53,12 +53,13 @@ pub(crate) struct Slot {
     pub outputs: Range<usize>,
 }
 
-/// A recorded signal: its column name and where it lives.
+/// A recorded signal: its column name, where it lives, its unit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Column {
     pub name: String,
     pub offset: usize,
     pub width: usize,
+    pub unit: Option<String>,
 }
 
 /// A wire as drawn, for `ctlgraph dot`: (source block, port) → (dest block, port).
@@ -86,6 +87,8 @@ pub struct Model {
     pub record_every: usize,
     /// The graph's acceptance conditions, compiled against `columns`.
     pub checks: Vec<crate::checks::Check>,
+    /// Plot panels over `columns` (empty: one panel per recorded name).
+    pub scopes: Vec<crate::scope::Scope>,
     pub edges: Vec<Edge>,
     pub sim: SimConfig,
     pub name: Option<String>,
@@ -190,8 +193,18 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         })
         .collect();
     let checks = crate::checks::compile(&g.checks, &headers(&columns), &g.parameters)?;
+    for scope in &g.scopes {
+        for (name, pos) in &scope.signals {
+            if !columns.iter().any(|c| &c.name == name) {
+                return Err(Diagnostic::at(pos, format!("scope: `{name}` is not recorded"))
+                    .suggest(name, columns.iter().map(|c| c.name.as_str()))
+                    .or_hint("a scope shows recorded signals by their `record:` names"));
+            }
+        }
+    }
     Ok(Model {
         checks,
+        scopes: g.scopes.clone(),
         blocks: model_blocks,
         meta,
         slots,

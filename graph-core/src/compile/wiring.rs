@@ -208,7 +208,7 @@ pub(super) fn record_columns(
     out_offset: &HashMap<(usize, usize), Port>,
 ) -> Result<Vec<Column>, Diagnostic> {
     let mut columns: Vec<Column> = Vec::new();
-    let mut push = |name: String, port: Port, pos: Option<&Pos>| -> Result<(), Diagnostic> {
+    let mut push = |name: String, port: Port, pos: Option<&Pos>, unit: Option<String>| -> Result<(), Diagnostic> {
         if name == "t" {
             let message = "`t` is the time column: record this signal under another name".to_string();
             return Err(match pos {
@@ -223,7 +223,7 @@ pub(super) fn record_columns(
                 None => Diagnostic::plain(message),
             });
         }
-        columns.push(Column { name, offset: port.offset, width: port.width });
+        columns.push(Column { name, offset: port.offset, width: port.width, unit });
         Ok(())
     };
     if g.records.is_empty() {
@@ -237,12 +237,13 @@ pub(super) fn record_columns(
                 } else {
                     format!("{}.{}", n.flat.path, port.name)
                 };
-                push(name, out_offset[&(i, p)], None)?;
+                push(name, out_offset[&(i, p)], None, None)?;
             }
         }
         return Ok(columns);
     }
-    for (name, ep) in &g.records {
+    for rec in &g.records {
+        let (name, ep) = (&rec.name, &rec.signal);
         let mut target = ep.clone();
         if let Some((_, outs)) = g.subsystems.get(&ep.block) {
             let port = resolve_sub_port(ep, outs, "outport")?;
@@ -259,7 +260,7 @@ pub(super) fn record_columns(
             };
             (src, port) = (d.src, d.port);
         }
-        push(name.clone(), out_offset[&(src, port)], Some(&ep.pos))?;
+        push(name.clone(), out_offset[&(src, port)], Some(&ep.pos), rec.unit.clone())?;
     }
     Ok(columns)
 }
