@@ -23,6 +23,9 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Simulate a graph; write CSV, SVG plot and JSON report on request.
+    #[command(
+        after_help = "Example:\n  ctlgraph run graphs/tutorial/pid_loop.yaml --out out/pid.csv --plot out/pid.svg --set kp=3"
+    )]
     Run {
         graph: PathBuf,
         /// Write the recorded signals as CSV (header `t`, then the recorded names).
@@ -35,7 +38,7 @@ enum Command {
         #[arg(long = "set", value_name = "NAME=VALUE")]
         sets: Vec<String>,
         /// Stop at this time instead of the graph's `simulation.stop`.
-        #[arg(long, value_name = "T")]
+        #[arg(long, value_name = "T", allow_negative_numbers = true)]
         stop_time: Option<f64>,
         /// Write a machine-readable run report (JSON).
         #[arg(long)]
@@ -45,11 +48,15 @@ enum Command {
         seed: Option<u64>,
     },
     /// Run every graph with `checks:` under the given files or folders.
+    #[command(after_help = "Example:\n  ctlgraph test graphs/tutorial graphs/fladrc/compare.yaml")]
     Test {
         /// Graph files or folders (default: graphs/).
         paths: Vec<PathBuf>,
     },
     /// Property-test a graph: vary parameters, run its checks, shrink failures.
+    #[command(
+        after_help = "Example:\n  ctlgraph prop graphs/tutorial/pid_loop.yaml --vary kp=1..4 --vary kd=0..0.3 --cases 128"
+    )]
     Prop {
         graph: PathBuf,
         /// A parameter and its range (repeatable): --vary w0=500..2000.
@@ -66,18 +73,23 @@ enum Command {
         seed: u64,
     },
     /// Validate a graph and print its execution order with sample times.
+    #[command(after_help = "Example:\n  ctlgraph check graphs/fladrc/fladrc.yaml --set delta=400")]
     Check {
         graph: PathBuf,
         #[arg(long = "set", value_name = "NAME=VALUE")]
         sets: Vec<String>,
     },
     /// Print the graph as Graphviz dot.
+    #[command(
+        after_help = "Example (needs Graphviz):\n  ctlgraph dot graphs/tutorial/pid_loop.yaml | dot -Tsvg > pid_loop.svg"
+    )]
     Dot {
         graph: PathBuf,
         #[arg(long = "set", value_name = "NAME=VALUE")]
         sets: Vec<String>,
     },
     /// List the block library, or document one block type.
+    #[command(after_help = "Example:\n  ctlgraph blocks transport_delay")]
     Blocks { r#type: Option<String> },
 }
 

@@ -212,3 +212,19 @@ fn scopes_draw_their_panels_with_units_and_the_csv_gets_its_units() {
     assert_eq!(out.status.code(), Some(0));
     assert!(!dir.path().join("plain.units.csv").exists());
 }
+
+#[test]
+fn papercuts_negative_stop_time_and_help_examples() {
+    let out = ctlgraph(&["run", LAG, "--stop-time", "-1"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("--stop-time -1: must be a positive number"), "{}", text(&out.stderr));
+    for sub in ["run", "test", "prop", "check", "dot", "blocks"] {
+        let out = ctlgraph(&[sub, "--help"]);
+        assert_eq!(out.status.code(), Some(0));
+        let help = text(&out.stdout);
+        assert!(
+            help.contains("Example") && help.contains(&format!("ctlgraph {sub} ")),
+            "`{sub} --help` shows no example:\n{help}"
+        );
+    }
+}

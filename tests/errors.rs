@@ -277,3 +277,18 @@ fn scope_and_unit_mistakes_are_positioned() {
     let two = "blocks:\n  u: { type: step }\nrecord:\n  - { a: u, b: u }\n";
     check(two, 4, col(two, 4, "{ a"), "a record entry names one signal", None);
 }
+
+#[test]
+fn zpk_conjugates_written_twice_are_reported() {
+    let yaml = "blocks:\n  u: { type: step }\n  g: { type: zpk, poles: [[-1, 2], [-1, -2]] }\nwires: [u -> g]\n";
+    check(
+        yaml,
+        3,
+        col(yaml, 3, "[-1, -2]"),
+        "block `g`: `poles`: [-1, -2] is the conjugate of [-1, 2], which already stands for the pair -1 ± 2j",
+        Some("write each conjugate pair once"),
+    );
+    // A repeated pair is written twice with the same sign, and is fine.
+    let repeated = "blocks:\n  u: { type: step }\n  g: { type: zpk, poles: [[-1, 2], [-1, 2]] }\nwires: [u -> g]\n";
+    assert!(ctlgraph::compile_str(repeated, "test.yaml", &[]).is_ok());
+}

@@ -48,7 +48,8 @@ pub const TYPES: &[BlockType] = &[
         category: "dynamics",
         summary: "Continuous transfer function from zeros, poles and gain.",
         doc: "G(s) = gain·Π(s − zᵢ)/Π(s − pᵢ). A complex root is written [re, im] and stands for the \
-              conjugate pair re ± j·im. Realised like transfer_function.\n\
+              conjugate pair re ± j·im (listing both conjugates, as MATLAB does, is reported as an error; \
+              write a pair twice for a repeated pair). Realised like transfer_function.\n\
               Stable region: every pole with negative real part; then |y| <= ‖g‖₁·sup|u| and a unit step settles at the DC gain G(0).",
         inputs: U_SCALAR,
         outputs: Y_SCALAR,

@@ -230,10 +230,25 @@ impl<'a> Params<'a> {
             _ => std::slice::from_ref(v),
         };
         let mut out = Vec::new();
+        let mut written: Vec<(f64, f64)> = Vec::new();
         for item in items {
             match &item.kind {
                 Kind::Seq(pair) if pair.len() == 2 => {
                     let (re, im) = (self.number_value(key, &pair[0])?, self.number_value(key, &pair[1])?);
+                    // MATLAB lists both conjugates; here one [re, im] stands for the pair.
+                    if im != 0.0 && written.contains(&(re, -im)) {
+                        return Err(Diagnostic::at(
+                            &item.pos,
+                            format!(
+                                "block `{}`: `{key}`: [{re}, {im}] is the conjugate of [{re}, {}], which already stands for the pair {re} ± {}j",
+                                self.block_name(),
+                                -im,
+                                im.abs()
+                            ),
+                        )
+                        .with_hint("write each conjugate pair once as [re, im]; write it twice for a repeated pair"));
+                    }
+                    written.push((re, im));
                     out.push((re, im));
                     if im != 0.0 {
                         out.push((re, -im));
