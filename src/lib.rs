@@ -14,6 +14,8 @@ pub mod prop;
 pub mod record;
 pub mod report;
 pub mod suite;
+pub mod sweep;
+pub mod sweep_plot;
 
 pub use ctlgraph_blocks as blocks;
 pub use ctlgraph_core as core;

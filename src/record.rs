@@ -10,6 +10,23 @@ use std::path::{Path, PathBuf};
 /// A CSV file written to a temporary name beside its destination and
 /// renamed into place by [`CsvFile::commit`]; dropped uncommitted, it
 /// leaves nothing behind.
+/// A number as CSV files show it: Rust's `Display` and `LowerExp` for f64
+/// print the shortest text that reads back to the same number, so values
+/// survive the round trip; very small or large magnitudes use the exponent
+/// form.
+pub struct Number(pub f64);
+
+impl std::fmt::Display for Number {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        if v == 0.0 || (1e-4..1e15).contains(&v.abs()) || !v.is_finite() {
+            write!(f, "{v}")
+        } else {
+            write!(f, "{v:e}")
+        }
+    }
+}
+
 pub struct CsvFile {
     dest: PathBuf,
     tmp: PathBuf,
@@ -26,9 +43,7 @@ impl CsvFile {
         Ok(CsvFile { dest: dest.to_path_buf(), tmp, writer: Some(writer), error: None })
     }
 
-    /// Appends a row. Rust's `Display` and `LowerExp` for f64 print the
-    /// shortest text that reads back to the same number, so values survive
-    /// the round trip; very small or large magnitudes use the exponent form.
+    /// Appends a row of numbers in [`Number`] form.
     pub fn write_row(&mut self, row: &[f64]) {
         let (Some(w), None) = (self.writer.as_mut(), &self.error) else {
             return;
@@ -36,8 +51,7 @@ impl CsvFile {
         let mut result = Ok(());
         for (i, &v) in row.iter().enumerate() {
             let sep = if i == 0 { "" } else { "," };
-            let plain = v == 0.0 || (1e-4..1e15).contains(&v.abs()) || !v.is_finite();
-            result = result.and_then(|_| if plain { write!(w, "{sep}{v}") } else { write!(w, "{sep}{v:e}") });
+            result = result.and_then(|_| write!(w, "{sep}{}", Number(v)));
         }
         if let Err(e) = result.and_then(|_| w.write_all(b"\n")) {
             self.error = Some(e);
