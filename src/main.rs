@@ -97,43 +97,8 @@ enum Command {
         merge: Option<SweepMerge>,
         /// The graph file.
         graph: Option<PathBuf>,
-        /// NAME=LO..HI:N (grid of N), NAME=v1,v2,… (list), or NAME=LO..HI with --random (repeatable).
-        #[arg(long, value_name = "SPEC")]
-        vary: Vec<String>,
-        /// Draw this many random values of every NAME=LO..HI.
-        #[arg(long, value_name = "N")]
-        random: Option<usize>,
-        /// Run every case with each seed A..B (inclusive).
-        #[arg(long, value_name = "A..B")]
-        seeds: Option<String>,
-        /// Seed of the random draws.
-        #[arg(long, default_value_t = 0)]
-        seed: u64,
-        /// Worker threads (default: all cores).
-        #[arg(long, value_name = "J")]
-        jobs: Option<usize>,
-        /// Run only the cases with index ≡ K (mod N): one task of a job array.
-        #[arg(long, value_name = "K/N")]
-        shard: Option<String>,
-        /// The results table (CSV), required.
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Add each case's wall time (the only column that varies between runs).
-        #[arg(long)]
-        timing: bool,
-        /// Write each case's recorded signals to DIR/case-NNNNNN.csv.
-        #[arg(long, value_name = "DIR")]
-        traces: Option<PathBuf>,
-        /// Overlay the recorded signals of (up to 50 evenly chosen) cases in one SVG.
-        #[arg(long, value_name = "FILE.svg")]
-        plot: Option<PathBuf>,
-        /// Plot a check's measured value: histogram, line over a 1-parameter grid,
-        /// or heat map over a 2-parameter grid; the check by name or a prefix of its text.
-        #[arg(long, value_name = "CHECK")]
-        plot_metric: Option<String>,
-        /// Where --plot-metric draws (default: metric.svg beside --out).
-        #[arg(long, value_name = "FILE.svg")]
-        metric_svg: Option<PathBuf>,
+        #[command(flatten)]
+        args: SweepArgs,
     },
     /// Validate a graph and print its execution order with sample times.
     #[command(after_help = "Example:\n  ctlgraph check graphs/fladrc/fladrc.yaml --set delta=400")]
@@ -167,42 +132,10 @@ fn main() -> ExitCode {
         Command::Test { paths } => test(paths),
         Command::Prop { graph, vary, vary_seed, cases, seed } => prop(&graph, &vary, vary_seed, cases, seed),
         Command::Sweep { merge: Some(SweepMerge::Merge { tables, out }), .. } => sweep_merge(&tables, &out),
-        Command::Sweep {
-            merge: None,
-            graph,
-            vary,
-            random,
-            seeds,
-            seed,
-            jobs,
-            shard,
-            out,
-            timing,
-            traces,
-            plot,
-            plot_metric,
-            metric_svg,
-        } => match (graph, out) {
-            (Some(graph), Some(out)) => sweep(
-                &graph,
-                SweepArgs {
-                    vary,
-                    random,
-                    seeds,
-                    seed,
-                    jobs,
-                    shard,
-                    out,
-                    timing,
-                    traces,
-                    plot,
-                    plot_metric,
-                    metric_svg,
-                },
-            ),
-            (None, _) => Err(Diagnostic::plain("sweep needs a graph file (or `sweep merge TABLES --out FILE`)").into()),
-            (_, None) => Err(Diagnostic::plain("sweep needs --out FILE.csv for the results table").into()),
-        },
+        Command::Sweep { merge: None, graph: Some(graph), args } => sweep(&graph, args),
+        Command::Sweep { merge: None, graph: None, .. } => {
+            Err(Diagnostic::plain("sweep needs a graph file (or `sweep merge TABLES --out FILE`)").into())
+        }
         Command::Check { graph, sets } => check(&graph, &sets),
         Command::Dot { graph, sets } => compile(&graph, &sets).map(|m| print!("{}", ctlgraph::dot::to_dot(&m))),
         Command::Blocks { r#type } => blocks(r#type.as_deref()),
@@ -509,19 +442,45 @@ fn prop(graph: &Path, vary: &[String], vary_seed: bool, cases: u32, seed: u64) -
     }
 }
 
-/// `ctlgraph sweep GRAPH …` arguments after the graph.
+/// `ctlgraph sweep GRAPH …` options.
+#[derive(clap::Args)]
 struct SweepArgs {
+    /// NAME=LO..HI:N (grid of N), NAME=v1,v2,… (list), or NAME=LO..HI with --random (repeatable).
+    #[arg(long, value_name = "SPEC")]
     vary: Vec<String>,
+    /// Draw this many random values of every NAME=LO..HI.
+    #[arg(long, value_name = "N")]
     random: Option<usize>,
+    /// Run every case with each seed A..B (inclusive).
+    #[arg(long, value_name = "A..B")]
     seeds: Option<String>,
+    /// Seed of the random draws.
+    #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "J")]
     jobs: Option<usize>,
+    /// Run only the cases with index ≡ K (mod N): one task of a job array.
+    #[arg(long, value_name = "K/N")]
     shard: Option<String>,
-    out: PathBuf,
+    /// The results table (CSV), required.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Add each case's wall time (the only column that varies between runs).
+    #[arg(long)]
     timing: bool,
+    /// Write each case's recorded signals to DIR/case-NNNNNN.csv.
+    #[arg(long, value_name = "DIR")]
     traces: Option<PathBuf>,
+    /// Overlay the recorded signals of (up to 50 evenly chosen) cases in one SVG.
+    #[arg(long, value_name = "FILE.svg")]
     plot: Option<PathBuf>,
+    /// Plot a check's measured value: histogram, line over a 1-parameter grid,
+    /// or heat map over a 2-parameter grid; the check by name or a prefix of its text.
+    #[arg(long, value_name = "CHECK")]
     plot_metric: Option<String>,
+    /// Where --plot-metric draws (default: metric.svg beside --out).
+    #[arg(long, value_name = "FILE.svg")]
     metric_svg: Option<PathBuf>,
 }
 
@@ -534,6 +493,9 @@ fn pair<T: std::str::FromStr>(flag: &str, arg: &str, sep: &str) -> Result<(T, T)
 
 fn sweep(graph: &Path, a: SweepArgs) -> Result<(), Failure> {
     use ctlgraph::sweep::{self, SweepSpec, Vary};
+    let Some(out) = a.out.clone() else {
+        return Err(Diagnostic::plain("sweep needs --out FILE.csv for the results table").into());
+    };
     let text = std::fs::read_to_string(graph)
         .map_err(|e| Diagnostic::plain(format!("{}: cannot read: {e}", graph.display())))?;
     let vary = a.vary.iter().map(|v| Vary::parse(v)).collect::<Result<Vec<_>, _>>()?;
@@ -578,13 +540,13 @@ fn sweep(graph: &Path, a: SweepArgs) -> Result<(), Failure> {
     let rows = sweep::run(&text, graph, &names, &mine, jobs, &keep, &stop, &done)?;
     bar.finish();
     let table = sweep::table(&names, &checks, &rows, total, a.timing);
-    write_atomic(&a.out, table.as_bytes()).map_err(io_error(&a.out))?;
+    write_atomic(&out, table.as_bytes()).map_err(io_error(&out))?;
     if let Some(path) = &a.plot {
         let svg = ctlgraph::sweep_plot::family(&rows, &graph.display().to_string()).map_err(Failure::Run)?;
         write_atomic(path, svg.as_bytes()).map_err(io_error(path))?;
     }
     if let Some(k) = metric {
-        let path = a.metric_svg.clone().unwrap_or_else(|| a.out.with_file_name("metric.svg"));
+        let path = a.metric_svg.clone().unwrap_or_else(|| out.with_file_name("metric.svg"));
         let svg = ctlgraph::sweep_plot::metric(&rows, &spec.vary, k, &checks[k]).map_err(Failure::Run)?;
         write_atomic(&path, svg.as_bytes()).map_err(io_error(&path))?;
     }
@@ -596,7 +558,7 @@ fn sweep(graph: &Path, a: SweepArgs) -> Result<(), Failure> {
             "interrupted: {} of {} cases written to {}",
             rows.len(),
             mine.len(),
-            a.out.display()
+            out.display()
         )));
     }
     Ok(())

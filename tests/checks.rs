@@ -1,15 +1,8 @@
 //! Graphs that test themselves: `checks:`, `ctlgraph test`, `ctlgraph prop`.
 
+mod common;
+use common::{ctlgraph, text};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn ctlgraph(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ctlgraph")).args(args).env("CI", "1").output().expect("runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
 
 /// A first-order lag with gain `k`: y settles at k.
 const LAG: &str = "parameters:\n  k: 0.5\n  tau: 0.2\n\

@@ -1,20 +1,9 @@
 //! The command line as scripts see it: outputs, exit codes 0/1/2, messages
 //! on stderr, `--set`, determinism.
 
+mod common;
+use common::{ctlgraph, path, text};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn ctlgraph(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ctlgraph")).args(args).env("CI", "1").output().expect("runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 const LAG: &str = "graphs/tutorial/first_order.yaml";
 

@@ -1,20 +1,8 @@
 //! `ctlgraph sweep`: the cases a command designs, determinism over jobs and
 //! shards, failing cases as rows, and the merge's checks.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn ctlgraph(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ctlgraph")).args(args).env("CI", "1").output().expect("runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+mod common;
+use common::{ctlgraph, path, text};
 
 const PID: &str = "graphs/tutorial/pid_loop.yaml";
 

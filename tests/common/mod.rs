@@ -2,6 +2,21 @@
 #![allow(dead_code)]
 
 use ctlgraph::record::Trace;
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// Runs the `ctlgraph` binary (as CI would: no progress bar).
+pub fn ctlgraph(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ctlgraph")).args(args).env("CI", "1").output().expect("runs")
+}
+
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+pub fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
 
 /// Compiles graph text (named `test.yaml` in messages) and runs it.
 pub fn run(yaml: &str) -> Trace {
