@@ -87,7 +87,12 @@ pub struct CheckResult {
 impl std::fmt::Display for CheckResult {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let verdict = if self.passed { "pass" } else { "FAIL" };
-        let (m, b) = (significant(self.measured), significant(self.bound));
+        let (mut m, b) = (significant(self.measured), significant(self.bound));
+        // Six digits would hide why a value at its bound passed or failed:
+        // give it in full there.
+        if m == b && self.measured != self.bound {
+            m = self.measured.to_string();
+        }
         write!(f, "{verdict}  {}  (measured {m}, bound {} {b})", self.name, self.op.symbol())
     }
 }
