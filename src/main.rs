@@ -40,6 +40,7 @@ enum Command {
         after_help = "Example:\n  ctlgraph run graphs/tutorial/pid_loop.yaml --out out/pid.csv --plot out/pid.svg --set kp=3"
     )]
     Run {
+        /// The graph file (YAML).
         graph: PathBuf,
         /// Write the recorded signals as CSV (header `t`, then the recorded names).
         #[arg(long)]
@@ -71,6 +72,7 @@ enum Command {
         after_help = "Example:\n  ctlgraph prop graphs/tutorial/pid_loop.yaml --vary kp=1..4 --vary kd=0..0.3 --cases 128"
     )]
     Prop {
+        /// The graph file (YAML); it needs `checks:`.
         graph: PathBuf,
         /// A parameter and its range (repeatable): --vary w0=500..2000.
         #[arg(long, value_name = "NAME=LO..HI", required = true)]
@@ -103,7 +105,9 @@ enum Command {
     /// Validate a graph and print its execution order with sample times.
     #[command(after_help = "Example:\n  ctlgraph check graphs/fladrc/fladrc.yaml --set delta=400")]
     Check {
+        /// The graph file (YAML).
         graph: PathBuf,
+        /// Override a graph parameter (repeatable).
         #[arg(long = "set", value_name = "NAME=VALUE")]
         sets: Vec<String>,
     },
@@ -112,13 +116,18 @@ enum Command {
         after_help = "Example (needs Graphviz):\n  ctlgraph dot graphs/tutorial/pid_loop.yaml | dot -Tsvg > pid_loop.svg"
     )]
     Dot {
+        /// The graph file (YAML).
         graph: PathBuf,
+        /// Override a graph parameter (repeatable).
         #[arg(long = "set", value_name = "NAME=VALUE")]
         sets: Vec<String>,
     },
     /// List the block library, or document one block type.
     #[command(after_help = "Example:\n  ctlgraph blocks transport_delay")]
-    Blocks { r#type: Option<String> },
+    Blocks {
+        /// A block type to document (all types when omitted).
+        r#type: Option<String>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -275,17 +284,24 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
     if let Some(t) = opts.stop_time.filter(|t| !(*t > 0.0 && t.is_finite())) {
         return Err(Diagnostic::plain(format!("--stop-time {t}: must be a positive number")).into());
     }
+    if let Some(plot) = opts.plot.filter(|p| !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"))) {
+        return Err(Diagnostic::plain(format!("--plot {}: ctlgraph draws SVG", plot.display()))
+            .with_hint("name the file .svg (rsvg-convert or a browser turns it into PNG)")
+            .into());
+    }
+    // `--out -`: the CSV goes to stdout, the summary to stderr.
+    let to_stdout = opts.out.is_some_and(|p| p == Path::new("-"));
     let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
     let model = ctlgraph::compile_file_seeded(graph, &sets, opts.seed)?;
     let seed = model.sim.seed;
     let checks = model.checks.clone();
     let mut sim = Simulator::new(model, opts.stop_time);
     let headers = sim.model().headers();
-    let mut csv = match opts.out {
+    let mut csv = match opts.out.filter(|_| !to_stdout) {
         Some(path) => Some(CsvFile::create(path, &headers).map_err(io_error(path))?),
         None => None,
     };
-    let keep_trace = opts.plot.is_some() || !checks.is_empty();
+    let keep_trace = opts.plot.is_some() || !checks.is_empty() || to_stdout;
     let mut trace = keep_trace.then(|| Trace::new(headers.clone()));
     let mut recorder = Recorder::new(sim.model());
     let mut progress = Progress::new(sim.stop_time());
@@ -328,6 +344,8 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
             warnings: sim.warnings(),
             checks: &results,
             columns: &sim.model().columns,
+            parameters: &sim.model().parameters,
+            overrides: &sets,
         };
         let text = serde_json::to_string_pretty(&to_json(&info)).unwrap_or_default();
         write_atomic(path, text.as_bytes()).map_err(io_error(path))?;
@@ -349,18 +367,28 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
     let simulated = sim.time();
     let wall_text = if wall < 1.0 { format!("{:.2} ms", wall * 1e3) } else { format!("{wall:.3} s") };
     let stats = sim.stats();
-    let events = if stats.events > 0 { format!(", {} events located", stats.events) } else { String::new() };
-    println!(
-        "{}: {} steps{events}, {simulated} s simulated in {wall_text} wall ({:.1}x real time)",
+    let plural = |n: u64, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
+    let events = if stats.events > 0 { format!(", {} located", plural(stats.events, "event")) } else { String::new() };
+    // Below 10 µs of wall time the ratio would be noise.
+    let ratio =
+        if wall >= 1e-5 && simulated > 0.0 { format!(" ({:.1}x real time)", simulated / wall) } else { String::new() };
+    let mut report = format!(
+        "{}: {}{events}, {simulated} s simulated in {wall_text} wall{ratio}\n",
         graph.display(),
-        stats.major_steps,
-        simulated / wall.max(1e-9)
+        plural(stats.major_steps, "step"),
     );
     for w in sim.warnings() {
-        println!("  warning: {w}");
+        report.push_str(&format!("  warning: {w}\n"));
     }
     for r in &results {
-        println!("  {r}");
+        report.push_str(&format!("  {r}\n"));
+    }
+    if let (true, Some(tr)) = (to_stdout, &trace) {
+        // A reader that stops early (`| head`) is not an error.
+        let _ = std::io::Write::write_all(&mut std::io::stdout(), ctlgraph::record::trace_csv(tr).as_bytes());
+        eprint!("{report}");
+    } else {
+        print!("{report}");
     }
     let failed = results.iter().filter(|r| !r.passed).count();
     if failed > 0 {

@@ -131,3 +131,15 @@ pub fn units_path(data: &Path) -> std::path::PathBuf {
     let stem = data.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     data.with_file_name(format!("{stem}.units.csv"))
 }
+
+/// A trace as CSV text: the header, then one row per sample in [`Number`] form.
+pub fn trace_csv(trace: &Trace) -> String {
+    let mut text = trace.headers.join(",");
+    text.push('\n');
+    for k in 0..trace.t().len() {
+        let row: Vec<String> = trace.columns.iter().map(|c| Number(c[k]).to_string()).collect();
+        text.push_str(&row.join(","));
+        text.push('\n');
+    }
+    text
+}

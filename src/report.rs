@@ -20,6 +20,10 @@ pub struct RunInfo<'a> {
     pub warnings: &'a [String],
     pub checks: &'a [CheckResult],
     pub columns: &'a [ctlgraph_core::compile::Column],
+    /// The graph's parameters as resolved for this run.
+    pub parameters: &'a [(String, f64)],
+    /// The `--set` overrides as given.
+    pub overrides: &'a [(String, String)],
 }
 
 /// SHA-256 of the graph file, lowercase hex.
@@ -45,6 +49,9 @@ pub fn to_json(info: &RunInfo) -> Value {
     json!({
         "ctlgraph_version": env!("CARGO_PKG_VERSION"),
         "graph": { "file": info.graph, "sha256": sha256_hex(info.graph_bytes) },
+        "command_line": std::env::args().collect::<Vec<_>>(),
+        "overrides": info.overrides.iter().map(|(n, v)| json!({ "name": n, "value": v })).collect::<Vec<_>>(),
+        "parameters": info.parameters.iter().map(|(n, v)| json!({ "name": n, "value": v })).collect::<Vec<_>>(),
         "solver": solver_json(info.method),
         "statistics": {
             "major_steps": s.major_steps,

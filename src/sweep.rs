@@ -243,14 +243,8 @@ pub fn run(
 /// Writes a case's signals to `dir/case-NNNNNN.csv` (whole or not at all).
 fn write_trace(dir: &Path, index: usize, trace: &crate::record::Trace) -> Result<(), String> {
     let path = dir.join(format!("case-{index:06}.csv"));
-    let mut text = trace.headers.join(",");
-    text.push('\n');
-    for k in 0..trace.t().len() {
-        let row: Vec<String> = trace.columns.iter().map(|c| Number(c[k]).to_string()).collect();
-        text.push_str(&row.join(","));
-        text.push('\n');
-    }
-    crate::record::write_atomic(&path, text.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))
+    crate::record::write_atomic(&path, crate::record::trace_csv(trace).as_bytes())
+        .map_err(|e| format!("{}: {e}", path.display()))
 }
 
 fn compile(text: &str, file: &Path, names: &[String], case: &Case) -> Result<ctlgraph_core::Model, Failure> {

@@ -217,3 +217,47 @@ fn papercuts_negative_stop_time_and_help_examples() {
         );
     }
 }
+
+#[test]
+fn first_day_papercuts() {
+    // `--set` of an unknown name lists the graph's parameters.
+    let out = ctlgraph(&["run", "graphs/tutorial/pid_loop.yaml", "--set", "foo=1"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("its parameters: wn, zeta, kp, ki, kd, u_max"), "{}", text(&out.stderr));
+    // One step is "1 step", and a run too short to time gives no ratio.
+    let dir = tempfile::tempdir().unwrap();
+    let tiny = dir.path().join("tiny.yaml");
+    std::fs::write(
+        &tiny,
+        "simulation: { stop: 0.1, solver: { method: rk4, step: 0.1 } }\nblocks:\n  c: { type: constant }\n",
+    )
+    .unwrap();
+    let out = ctlgraph(&["run", path(&tiny)]);
+    let line = text(&out.stdout);
+    assert!(line.contains(": 1 step, 0.1 s simulated in "), "{line}");
+    // `--out -` writes the CSV to stdout and the summary to stderr.
+    let out = ctlgraph(&["run", LAG, "--out", "-"]);
+    assert_eq!(out.status.code(), Some(0));
+    let csv = text(&out.stdout);
+    assert!(csv.starts_with("t,u,y\n0,1,0\n") && csv.lines().count() == 3002, "{}", &csv[..60]);
+    assert!(text(&out.stderr).contains("3000 steps"));
+    // A plot is SVG: another extension is refused, not filled with SVG bytes.
+    let png = dir.path().join("p.png");
+    let out = ctlgraph(&["run", LAG, "--plot", path(&png)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("ctlgraph draws SVG") && !png.exists());
+    // The report records the overrides, the resolved parameters and the command.
+    let report = |set: &str| {
+        let json = dir.path().join(format!("{set}.json"));
+        let out = ctlgraph(&["run", "graphs/tutorial/pid_loop.yaml", "--set", set, "--report", path(&json)]);
+        assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(json).unwrap()).unwrap()
+    };
+    let (a, b) = (report("kp=2.5"), report("kp=3"));
+    assert_eq!(a["overrides"][0]["value"], "2.5");
+    let kp = |r: &serde_json::Value| {
+        r["parameters"].as_array().unwrap().iter().find(|p| p["name"] == "kp").unwrap()["value"].clone()
+    };
+    assert_eq!((kp(&a), kp(&b)), (serde_json::json!(2.5), serde_json::json!(3.0)));
+    assert!(b["command_line"].as_array().unwrap().iter().any(|w| w == "kp=3"));
+}

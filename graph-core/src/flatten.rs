@@ -102,8 +102,10 @@ pub fn load_str(text: &str, file: Arc<str>, overrides: &[(String, String)]) -> R
     let known: Vec<&str> = graph.parameters.iter().map(|(k, _)| k.name.as_str()).collect();
     for (name, _) in overrides {
         if !known.contains(&name.as_str()) {
+            let list = if known.is_empty() { "none".to_string() } else { known.join(", ") };
             return Err(Diagnostic::plain(format!("--set {name}: {file} has no parameter `{name}`"))
-                .suggest(name, known.iter().copied()));
+                .suggest(name, known.iter().copied())
+                .or_hint(format!("its parameters: {list}")));
         }
     }
     let ovr: Vec<(String, Override, Option<Pos>)> =

@@ -91,6 +91,8 @@ pub struct Model {
     pub scopes: Vec<crate::scope::Scope>,
     pub edges: Vec<Edge>,
     pub sim: SimConfig,
+    /// The top-level parameters after `--set` overrides, in file order.
+    pub parameters: Vec<(String, f64)>,
     pub name: Option<String>,
     pub file: std::sync::Arc<str>,
 }
@@ -217,6 +219,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         record_every: g.record_every,
         edges,
         sim: g.sim.clone(),
+        parameters: g.parameters.clone(),
         name: g.name.clone(),
         file: g.file.clone(),
     })
