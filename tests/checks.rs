@@ -53,7 +53,10 @@ fn check_errors_are_positioned_and_invalid_graphs_exit_2() {
     let out = ctlgraph(&["test", &bad]);
     assert_eq!(out.status.code(), Some(2));
     let stdout = text(&out.stdout);
-    assert!(stdout.contains("typo.yaml:11:11: check: unknown name `yy`"), "{stdout}");
+    assert!(
+        stdout.contains("typo.yaml:11:11: check: `peak` takes a recorded signal first: `yy` is not a recorded signal"),
+        "{stdout}"
+    );
     assert!(stdout.contains("did you mean `y`?"), "{stdout}");
     assert_eq!(ctlgraph(&["test", "no/such/folder"]).status.code(), Some(2));
 }

@@ -132,6 +132,14 @@ impl Scope for CheckScope<'_> {
         Metric::from_name(function).is_some()
     }
 
+    fn signal_functions(&self) -> Vec<&'static str> {
+        metrics::METRICS.iter().map(|(n, _, _)| *n).collect()
+    }
+
+    fn signals(&self) -> Vec<String> {
+        self.headers.iter().skip(1).filter(|h| !h.contains('[')).cloned().collect()
+    }
+
     fn signal_call(&self, function: &str, signal: &str, args: Vec<Expr>) -> Result<usize, String> {
         let (metric, own) = Metric::from_name(function).ok_or_else(|| format!("unknown metric `{function}`"))?;
         if args.len() < own.len() || args.len() > own.len() + 2 {
@@ -259,8 +267,21 @@ mod tests {
         let (headers, _) = trace();
         let err = |text: &str| compile(&[spec(text)], &headers, &[]).unwrap_err();
         let d = err("peak(ee, 0.6) < 1");
-        assert_eq!((d.pos.clone().unwrap().col, d.message.as_str()), (10, "check: unknown name `ee`"));
+        let message = "check: `peak` takes a recorded signal first: `ee` is not a recorded signal";
+        assert_eq!((d.pos.clone().unwrap().col, d.message.as_str()), (10, message));
         assert_eq!(d.hint.as_deref(), Some("did you mean `e`?"));
+        // A misspelt metric is an unknown function, not an unknown signal.
+        let d = err("maxabs(y) < 1");
+        assert_eq!((d.pos.clone().unwrap().col, d.message.as_str()), (5, "check: unknown function `maxabs`"));
+        assert_eq!(d.hint.as_deref(), Some("did you mean `max_abs`?"));
+        // A parameter where a signal belongs is said to be one.
+        let d = compile(&[spec("max_abs(k) < 3")], &headers, &[("k".into(), 1.0)]).unwrap_err();
+        assert_eq!(
+            d.message,
+            "check: `max_abs` takes a recorded signal first: `k` is a parameter, not a recorded signal"
+        );
+        // max/min of numbers stay the built-ins.
+        assert!(compile(&[spec("max(k, 1) < 3")], &headers, &[("k".into(), 1.0)]).is_ok());
         let d = err("final_value(y) = 1");
         assert!(d.message.contains("compares nothing"), "{d}");
         let d = err("overshoot(y) < 5");

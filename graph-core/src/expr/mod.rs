@@ -43,6 +43,16 @@ pub trait Scope {
         false
     }
 
+    /// The names of the signal functions, for hints.
+    fn signal_functions(&self) -> Vec<&'static str> {
+        Vec::new()
+    }
+
+    /// The signals, for hints.
+    fn signals(&self) -> Vec<String> {
+        Vec::new()
+    }
+
     /// Registers a call of a signal function, evaluated outside the
     /// expression, and returns the variable slot its value will occupy.
     fn signal_call(&self, function: &str, _signal: &str, _args: Vec<Expr>) -> Result<usize, String> {
@@ -444,6 +454,10 @@ impl Parser<'_> {
         if let Some(signal) = self.signal_argument(name) {
             return self.signal_call(name, &signal, offset);
         }
+        let builtin = FUNC1.iter().any(|(n, _)| *n == name) || FUNC2.contains(&name) || VARIADIC.contains(&name);
+        if !builtin {
+            return Err(self.not_a_function(name, offset));
+        }
         let mut args = vec![self.expr()?];
         while self.eat(',') {
             args.push(self.expr()?);
@@ -472,12 +486,43 @@ impl Parser<'_> {
                 Node::Bin(Op::Pow, Box::new(a), Box::new(b))
             });
         }
-        if VARIADIC.contains(&name) {
-            return Ok(Node::MinMax { max: name == "max", args });
+        Ok(Node::MinMax { max: name == "max", args })
+    }
+
+    /// Why `name(` cannot be called: a signal function whose first argument
+    /// is not a recorded signal, or no function at all.
+    fn not_a_function(&self, name: &str, offset: usize) -> ExprError {
+        if self.scope.is_signal_function(name) {
+            let signals = self.scope.signals();
+            let (what, hint) = match self.tokens.get(self.at).map(|t| &t.kind) {
+                Some(TokKind::Name(arg)) if self.scope.lookup(arg).is_some() => {
+                    (format!("`{arg}` is a parameter, not a recorded signal"), None)
+                }
+                Some(TokKind::Name(arg)) => (
+                    format!("`{arg}` is not a recorded signal"),
+                    crate::diag::closest(arg, signals.iter().map(String::as_str))
+                        .map(|c| format!("did you mean `{c}`?")),
+                ),
+                _ => ("its first argument must be a recorded signal's name".to_string(), None),
+            };
+            let hint =
+                hint.or_else(|| (!signals.is_empty()).then(|| format!("recorded signals: {}", signals.join(", "))));
+            // Point at the argument that is wrong.
+            let offset = self.tokens.get(self.at).map_or(offset, |t| t.offset);
+            return ExprError { offset, message: format!("`{name}` takes a recorded signal first: {what}"), hint };
         }
-        let all = FUNC1.iter().map(|(n, _)| *n).chain(FUNC2).chain(VARIADIC);
-        let hint = crate::diag::closest(name, all).map(|c| format!("did you mean `{c}`?"));
-        Err(ExprError { offset, message: format!("unknown function `{name}`"), hint })
+        let metrics = self.scope.signal_functions();
+        let all: Vec<&str> = FUNC1
+            .iter()
+            .map(|(n, _)| *n)
+            .chain(FUNC2.iter().copied())
+            .chain(VARIADIC)
+            .chain(metrics.iter().copied())
+            .collect();
+        let hint = crate::diag::closest(name, all.iter().copied())
+            .map(|c| format!("did you mean `{c}`?"))
+            .or_else(|| (!metrics.is_empty()).then(|| format!("metrics: {}", metrics.join(", "))));
+        ExprError { offset, message: format!("unknown function `{name}`"), hint }
     }
 
     /// The signal named by the first argument of `function(`, when the
