@@ -294,8 +294,11 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
     let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
     let model = ctlgraph::compile_file_seeded(graph, &sets, opts.seed)?;
     let seed = model.sim.seed;
-    let checks = model.checks.clone();
     let mut sim = Simulator::new(model, opts.stop_time);
+    // Checks whose window lies after the stop time (a shortened run) cannot
+    // measure anything: they are skipped, and said so.
+    let (checks, skipped): (Vec<_>, Vec<_>) =
+        sim.model().checks.iter().cloned().partition(|c| c.window_problem(sim.stop_time()).is_none());
     let headers = sim.model().headers();
     let mut csv = match opts.out.filter(|_| !to_stdout) {
         Some(path) => Some(CsvFile::create(path, &headers).map_err(io_error(path))?),
@@ -382,6 +385,10 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
     }
     for r in &results {
         report.push_str(&format!("  {r}\n"));
+    }
+    for c in &skipped {
+        let why = c.window_problem(sim.stop_time()).unwrap_or_default();
+        report.push_str(&format!("  skip  {}  ({why})\n", c.name));
     }
     if let (true, Some(tr)) = (to_stdout, &trace) {
         // A reader that stops early (`| head`) is not an error.

@@ -261,3 +261,11 @@ fn first_day_papercuts() {
     assert_eq!((kp(&a), kp(&b)), (serde_json::json!(2.5), serde_json::json!(3.0)));
     assert!(b["command_line"].as_array().unwrap().iter().any(|w| w == "kp=3"));
 }
+
+#[test]
+fn a_check_window_after_the_stop_time_is_skipped_with_its_reason() {
+    let out = ctlgraph(&["run", "graphs/tutorial/pid_loop.yaml", "--stop-time", "1"]);
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("  skip  steady  (its window starts at 2 s, after the stop time 1 s)"), "{stdout}");
+    assert!(!stdout.contains("FAIL  steady"), "{stdout}");
+}

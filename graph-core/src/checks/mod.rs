@@ -212,6 +212,16 @@ fn compile_one(spec: &CheckSpec, headers: &[String], params: &[(String, f64)]) -
 
 impl Check {
     /// Evaluates the check on a run's recorded signals.
+    /// Why the check cannot measure anything in a run that ends at `stop`:
+    /// a metric window (given as constants) that starts after the stop time.
+    pub fn window_problem(&self, stop: f64) -> Option<String> {
+        self.calls.iter().find_map(|call| {
+            let own = metrics::METRICS.iter().find(|(_, m, _)| *m == call.metric).map_or(0, |(_, _, a)| a.len());
+            let from = call.args.get(own).and_then(Expr::constant)?;
+            (from > stop).then(|| format!("its window starts at {from} s, after the stop time {stop} s"))
+        })
+    }
+
     /// The check over recorded columns: `columns[0]` is time, the others
     /// in the order of the headers the check was compiled against.
     /// (`Trace::check` is the usual entry.)
