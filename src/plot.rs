@@ -11,6 +11,27 @@ use plotters::prelude::*;
 /// At most this many points per series reach the SVG; longer series are
 /// reduced to per-bucket minima and maxima so peaks survive.
 const MAX_POINTS: usize = 2000;
+
+/// Okabe & Ito's colour-blind-safe palette (2008), yellow last: blue,
+/// vermillion, bluish green, orange, sky blue, reddish purple, black, yellow.
+pub const PALETTE: [RGBColor; 8] = [
+    RGBColor(0, 114, 178),
+    RGBColor(213, 94, 0),
+    RGBColor(0, 158, 115),
+    RGBColor(230, 159, 0),
+    RGBColor(86, 180, 233),
+    RGBColor(204, 121, 167),
+    RGBColor(0, 0, 0),
+    RGBColor(240, 228, 66),
+];
+
+/// A tick label in its shortest form: `250`, not `250.0`; `0`, not `-0.0`.
+fn tick(v: &f64) -> String {
+    let v = if v.abs() < 1e-12 { 0.0 } else { *v };
+    let text = format!("{v:.6}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    if text.is_empty() || text == "-" { "0".into() } else { text.to_string() }
+}
 const PANEL_HEIGHT: u32 = 220;
 const WIDTH: u32 = 1000;
 
@@ -77,6 +98,8 @@ fn draw_panel<DB: DrawingBackend>(
         .configure_mesh()
         .x_desc("t [s]")
         .y_desc(p.y_desc.as_str())
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(|e| e.to_string())?;
@@ -89,7 +112,7 @@ fn draw_panel<DB: DrawingBackend>(
             .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 18, y + 5)], shade.filled()));
     }
     for (k, &c) in p.columns.iter().enumerate() {
-        let color = Palette99::pick(k).to_rgba();
+        let color = PALETTE[k % PALETTE.len()].to_rgba();
         let points = reduce(&t[first..last], &trace.columns[c][first..last]);
         chart
             .draw_series(LineSeries::new(points, color.stroke_width(2)))

@@ -193,6 +193,9 @@ fn scopes_draw_their_panels_with_units_and_the_csv_gets_its_units() {
     }
     // Two panels: two time axes.
     assert_eq!(svg.matches("t [s]").count(), 2);
+    // Okabe–Ito colours, first blue then vermillion; tick labels in shortest form.
+    assert!(svg.contains("stroke=\"#0072B2\"") && svg.contains("stroke=\"#D55E00\""));
+    assert!(!svg.contains("\n0.0\n") && !svg.contains("\n-0\n") && svg.contains("\n0.5\n"), "tick labels");
     let units = std::fs::read_to_string(dir.path().join("run.units.csv")).unwrap();
     assert_eq!(units, "t,u,y\ns,V,mm\n");
     // Without scopes or units: one panel per name, no units file.
