@@ -12,6 +12,7 @@ pub mod dot;
 pub mod plot;
 pub mod prop;
 pub mod record;
+pub mod reference;
 pub mod report;
 pub mod suite;
 pub mod sweep;

@@ -123,10 +123,15 @@ enum Command {
         sets: Vec<String>,
     },
     /// List the block library, or document one block type.
-    #[command(after_help = "Example:\n  ctlgraph blocks transport_delay")]
+    #[command(
+        after_help = "Example:\n  ctlgraph blocks transport_delay\n  ctlgraph blocks --markdown > docs/blocks.md"
+    )]
     Blocks {
         /// A block type to document (all types when omitted).
         r#type: Option<String>,
+        /// Print the whole reference as Markdown (docs/blocks.md is this output).
+        #[arg(long, conflicts_with = "type")]
+        markdown: bool,
     },
 }
 
@@ -147,7 +152,11 @@ fn main() -> ExitCode {
         }
         Command::Check { graph, sets } => check(&graph, &sets),
         Command::Dot { graph, sets } => compile(&graph, &sets).map(|m| print!("{}", ctlgraph::dot::to_dot(&m))),
-        Command::Blocks { r#type } => blocks(r#type.as_deref()),
+        Command::Blocks { markdown: true, .. } => {
+            print!("{}", ctlgraph::reference::markdown(&ctlgraph::registry()));
+            Ok(())
+        }
+        Command::Blocks { r#type, .. } => blocks(r#type.as_deref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

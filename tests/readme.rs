@@ -111,3 +111,20 @@ fn the_first_tutorial_step_prints_what_it_says() {
         assert!(text(&out.stderr).contains(line.trim()), "stderr lacks `{}`:\n{}", line.trim(), text(&out.stderr));
     }
 }
+
+#[test]
+fn the_block_reference_page_is_the_library_as_it_is() {
+    let page = std::fs::read_to_string("docs/blocks.md").unwrap();
+    let out = ctlgraph(&["blocks", "--markdown"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(
+        page == text(&out.stdout),
+        "docs/blocks.md is stale: regenerate it with `ctlgraph blocks --markdown > docs/blocks.md`"
+    );
+    // What a new user looks for is there.
+    for entry in
+        ["### `gain`", "| `k` |", "### `gaussian_noise`", "| `variance` |", "### `state_space`", "| `A` |", "| `D` |"]
+    {
+        assert!(page.contains(entry), "docs/blocks.md lacks {entry}");
+    }
+}
