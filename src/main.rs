@@ -258,14 +258,18 @@ impl Progress {
         if self.bar.is_none() && self.start.elapsed() > Duration::from_secs(2) {
             let bar = indicatif::ProgressBar::new(1000);
             bar.set_style(
-                indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% t = {msg} s, eta {eta}")
+                indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {msg}")
                     .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
             );
             self.bar = Some(bar);
         }
         if let Some(bar) = &self.bar {
             bar.set_position((1000.0 * t / self.stop) as u64);
-            bar.set_message(format!("{t:.4}"));
+            // The remaining simulated time at the rate so far (indicatif's
+            // own estimate follows recent ticks and jumps with step size).
+            let wall = self.start.elapsed().as_secs_f64();
+            let eta = if t > 0.0 { (self.stop - t) * wall / t } else { f64::NAN };
+            bar.set_message(format!("t = {t:.4} s, eta {eta:.0} s"));
         }
     }
 
@@ -459,7 +463,10 @@ fn prop(graph: &Path, vary: &[String], vary_seed: bool, cases: u32, seed: u64) -
     let vary = vary.iter().map(|v| Vary::parse(v)).collect::<Result<Vec<_>, _>>()?;
     let ranges: Vec<String> = vary.iter().map(|v| format!("{} in [{}, {}]", v.name, v.lo, v.hi)).collect();
     let cfg = PropConfig { vary, vary_seed, cases, seed };
-    match ctlgraph::prop::run(graph, &cfg)? {
+    let bar = CaseProgress::new(cases as usize);
+    let outcome = ctlgraph::prop::run(graph, &cfg, &|| bar.tick());
+    bar.finish();
+    match outcome? {
         PropOutcome::Held { cases } => {
             let seeds = if vary_seed { " and random seeds" } else { "" };
             println!("{}: checks hold in {cases} cases for {}{seeds}", graph.display(), ranges.join(", "));
@@ -636,8 +643,13 @@ impl CaseProgress {
             bar
         }))
     }
+    /// One more case done (past the planned count, e.g. shrinking, the
+    /// bar grows).
     fn tick(&self) {
         if let Some(b) = &self.0 {
+            if b.position() >= b.length().unwrap_or(0) {
+                b.inc_length(1);
+            }
             b.inc(1);
         }
     }

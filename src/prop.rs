@@ -89,7 +89,14 @@ fn evaluate(graph: &Path, case: &Case) -> (bool, Result<Vec<CheckResult>, Failur
 
 /// Draws `cases` parameter sets, runs them in parallel, and shrinks the
 /// first failure (in draw order, so results do not depend on scheduling).
-pub fn run(graph: &Path, cfg: &PropConfig) -> Result<PropOutcome, Failure> {
+/// Runs the property test; `tick` is called after every run of the graph
+/// (the drawn cases, then each shrinking step), for progress display.
+pub fn run(graph: &Path, cfg: &PropConfig, tick: &(dyn Fn() + Sync)) -> Result<PropOutcome, Failure> {
+    let evaluate = |graph: &Path, case: &Case| {
+        let verdict = evaluate(graph, case);
+        tick();
+        verdict
+    };
     let model = crate::compile_file(graph, &[])?;
     if model.checks.is_empty() {
         return Err(Diagnostic::in_file(&graph.display().to_string(), "has no `checks:` to test").into());
