@@ -272,3 +272,35 @@ fn a_check_window_after_the_stop_time_is_skipped_with_its_reason() {
     assert!(stdout.contains("  skip  steady  (its window starts at 2 s, after the stop time 1 s)"), "{stdout}");
     assert!(!stdout.contains("FAIL  steady"), "{stdout}");
 }
+
+#[test]
+fn a_subsystem_file_checks_on_its_own_and_its_ports_are_named_as_written() {
+    let out = ctlgraph(&["check", "graphs/lib/ladrc.yaml"]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.contains("ok as a subsystem") && stdout.contains("inports:  r, y") && stdout.contains("outports: u"),
+        "{stdout}"
+    );
+    // A mistake inside is reported in the subsystem file, exit 2.
+    let dir = tempfile::tempdir().unwrap();
+    let inner = dir.path().join("inner.yaml");
+    std::fs::write(
+        &inner,
+        "blocks:\n  F: { type: inport }\n  g: { type: gain, k: 2 }\n  y: { type: outport }\nwires: [F -> g, g -> yy]\n",
+    )
+    .unwrap();
+    let out = ctlgraph(&["check", path(&inner)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("inner.yaml:5:22: wire: no block named `yy`"), "{}", text(&out.stderr));
+    // A subsystem port wired twice is named `sub.port`, as written.
+    std::fs::write(
+        &inner,
+        "blocks:\n  F: { type: inport }\n  g: { type: gain, k: 2 }\n  y: { type: outport }\nwires: [F -> g, g -> y]\n",
+    )
+    .unwrap();
+    let outer = dir.path().join("outer.yaml");
+    std::fs::write(&outer, "blocks:\n  a: { type: constant }\n  b: { type: constant }\n  plant: { type: subsystem, file: inner.yaml }\nwires: [a -> plant.F, b -> plant.F]\n").unwrap();
+    let out = ctlgraph(&["check", path(&outer)]);
+    assert!(text(&out.stderr).contains("input `plant.F` is wired twice"), "{}", text(&out.stderr));
+}

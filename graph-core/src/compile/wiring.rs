@@ -89,8 +89,13 @@ pub(super) fn connect(
         let sp = port_index(&nodes[s], &w.src, false)?;
         let dp = port_index(&nodes[d], &w.dst, true)?;
         if let Some(prev) = &direct[d][dp] {
-            let port = &nodes[d].iface.inputs[dp].name;
-            return Err(Diagnostic::at(&w.dst.pos, format!("input `{}.{port}` is wired twice", nodes[d].flat.path))
+            // As the user wrote it: a subsystem's port is `sub.port`, not its inport block.
+            let path = &nodes[d].flat.path;
+            let shown = match path.rsplit_once('/') {
+                Some((sub, port)) if nodes[d].is_virtual => format!("{sub}.{port}"),
+                _ => format!("{path}.{}", nodes[d].iface.inputs[dp].name),
+            };
+            return Err(Diagnostic::at(&w.dst.pos, format!("input `{shown}` is wired twice"))
                 .with_hint(format!("it is already fed at line {}; use a `sum` block to add signals", prev.pos.line)));
         }
         direct[d][dp] = Some(Driver { src: s, port: sp, pos: w.dst.pos.clone() });
