@@ -222,3 +222,17 @@ fn reset_reruns_identically() {
     assert_eq!(runs[0], runs[1]);
     assert!(runs[0].len() > 2000);
 }
+
+#[test]
+fn grid_times_read_as_the_grid() {
+    // 47 steps of 0.01 are 0.47, not 47·0.01 = 0.47000000000000003; the
+    // same for sample hits of a clock.
+    let yaml = "simulation: { stop: 1.0, solver: { method: rk4, step: 0.01 } }\n\
+                blocks:\n  c: { type: clock }\n  z: { type: zero_order_hold, sample_time: 0.01 }\n\
+                wires: [c -> z]\nrecord: [z]\n";
+    let trace = run(yaml);
+    let t = trace.t();
+    assert_eq!(t[47], 0.47);
+    assert_eq!(trace.column("z").unwrap()[47], 0.47);
+    assert!(t.iter().enumerate().all(|(k, &tk)| tk == k as f64 / 100.0));
+}

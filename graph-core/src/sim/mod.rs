@@ -61,10 +61,35 @@ impl fmt::Display for SimError {
 
 impl std::error::Error for SimError {}
 
+/// The times k·h of a grid with step h. When h is the reciprocal of a
+/// whole number n (0.01, 1e-4, 0.5), k/n is used: division is correctly
+/// rounded, so 47 steps of 0.01 give 0.47, the double nearest to 47/100,
+/// where 47·0.01 gives 0.47000000000000003.
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    step: f64,
+    per_unit: Option<f64>,
+}
+
+impl Grid {
+    fn new(step: f64) -> Self {
+        let n = (1.0 / step).round();
+        let exact = step > 0.0 && n >= 1.0 && n < 9e15 && (n * step - 1.0).abs() <= 4.0 * f64::EPSILON;
+        Grid { step, per_unit: exact.then_some(n) }
+    }
+
+    fn time(&self, k: u64) -> f64 {
+        match self.per_unit {
+            Some(n) => k as f64 / n,
+            None => k as f64 * self.step,
+        }
+    }
+}
+
 /// One discrete rate's position on its own time line.
 #[derive(Clone, Copy, Debug)]
 struct Clock {
-    period: f64,
+    grid: Grid,
     offset: f64,
     /// Index of the next hit not yet taken.
     tick: u64,
@@ -73,7 +98,7 @@ struct Clock {
 
 impl Clock {
     fn next_time(&self) -> f64 {
-        self.offset + self.tick as f64 * self.period
+        self.offset + self.grid.time(self.tick)
     }
 }
 
@@ -96,6 +121,7 @@ pub struct Simulator {
     /// Fixed-step grid: next tick and step (0 for the adaptive method).
     grid_tick: u64,
     grid_step: f64,
+    grid: Grid,
     t: f64,
     stop: f64,
     /// Times closer than this are the same major step.
@@ -119,11 +145,14 @@ impl Simulator {
         let stop = stop.unwrap_or(model.sim.stop);
         let method = model.sim.method;
         let grid_step = if method.is_adaptive() { 0.0 } else { method.max_step() };
-        let clocks: Vec<Clock> =
-            model.clocks.iter().map(|&(period, offset)| Clock { period, offset, tick: 0, hit: false }).collect();
+        let clocks: Vec<Clock> = model
+            .clocks
+            .iter()
+            .map(|&(period, offset)| Clock { grid: Grid::new(period), offset, tick: 0, hit: false })
+            .collect();
         let smallest = clocks
             .iter()
-            .map(|c| c.period)
+            .map(|c| c.grid.step)
             .chain([stop, method.max_step()])
             .filter(|&p| p > 0.0)
             .fold(f64::INFINITY, f64::min);
@@ -138,6 +167,7 @@ impl Simulator {
             clocks,
             grid_tick: 0,
             grid_step,
+            grid: Grid::new(grid_step),
             t: 0.0,
             stop,
             tol: 1e-9 * smallest,
@@ -320,7 +350,7 @@ impl Simulator {
         // Land exactly on the target when the solver reached it.
         self.t = if (target - t_new).abs() <= self.tol { target } else { t_new };
         if self.grid_step > 0.0 {
-            while (self.grid_tick as f64) * self.grid_step <= self.t + self.tol {
+            while self.grid.time(self.grid_tick) <= self.t + self.tol {
                 self.grid_tick += 1;
             }
         }
@@ -359,7 +389,7 @@ impl Simulator {
             next = next.min(c.next_time());
         }
         if self.grid_step > 0.0 {
-            next = next.min(self.grid_tick as f64 * self.grid_step);
+            next = next.min(self.grid.time(self.grid_tick));
         }
         if self.next_event <= next + self.tol { self.next_event } else { next }
     }
