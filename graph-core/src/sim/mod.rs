@@ -74,7 +74,7 @@ struct Grid {
 impl Grid {
     fn new(step: f64) -> Self {
         let n = (1.0 / step).round();
-        let exact = step > 0.0 && n >= 1.0 && n < 9e15 && (n * step - 1.0).abs() <= 4.0 * f64::EPSILON;
+        let exact = step > 0.0 && (1.0..9e15).contains(&n) && (n * step - 1.0).abs() <= 4.0 * f64::EPSILON;
         Grid { step, per_unit: exact.then_some(n) }
     }
 
