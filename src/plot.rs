@@ -120,14 +120,46 @@ fn draw_panel<DB: DrawingBackend>(
             .label(trace.headers[c].as_str())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
     }
+    let entries = p.columns.len() + usize::from(p.band.is_some());
+    let corner = quiet_corner(trace, t, p, (first, last), ([t0, t1], [lo, hi]), entries);
     chart
         .configure_series_labels()
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
+        .position(corner)
         .draw()
         .map_err(|e| e.to_string())?;
     Ok(())
+}
+
+/// The corner of the panel where the legend covers the fewest samples: the
+/// legend is about a fifth of the width wide and one text line per entry high.
+fn quiet_corner(
+    trace: &Trace,
+    t: &[f64],
+    p: &Panel,
+    (first, last): (usize, usize),
+    ([t0, t1], [lo, hi]): ([f64; 2], [f64; 2]),
+    entries: usize,
+) -> SeriesLabelPosition {
+    let (w, h) = (0.22, (0.1 * entries as f64 + 0.05).min(0.9));
+    let corners = [
+        (SeriesLabelPosition::UpperRight, 1.0 - w, 1.0 - h),
+        (SeriesLabelPosition::UpperLeft, 0.0, 1.0 - h),
+        (SeriesLabelPosition::LowerRight, 1.0 - w, 0.0),
+        (SeriesLabelPosition::LowerLeft, 0.0, 0.0),
+    ];
+    let covered = |x0: f64, y0: f64| {
+        p.columns
+            .iter()
+            .flat_map(|&c| (first..last).map(move |k| (t[k], trace.columns[c][k])))
+            .filter(|&(x, y)| {
+                let (x, y) = ((x - t0) / (t1 - t0), (y - lo) / (hi - lo));
+                x >= x0 && x <= x0 + w && y >= y0 && y <= y0 + h
+            })
+            .count()
+    };
+    corners.into_iter().min_by_key(|&(_, x0, y0)| covered(x0, y0)).map_or(SeriesLabelPosition::UpperRight, |c| c.0)
 }
 
 /// `label [unit]`, or the label alone.
@@ -283,6 +315,28 @@ mod tests {
         let g = groups(&Trace::new(headers));
         let names: Vec<(&str, usize)> = g.iter().map(|(n, c)| (n.as_str(), c.len())).collect();
         assert_eq!(names, [("r", 1), ("y", 2), ("v", 2), ("d_x", 1)]);
+    }
+
+    #[test]
+    fn the_legend_goes_where_the_curves_are_not() {
+        // A ramp from lower left to upper right leaves the upper left and
+        // lower right empty; the first empty corner in the order tried wins.
+        let mut trace = Trace::new(vec!["t".into(), "y".into()]);
+        for k in 0..=100 {
+            trace.push(&[k as f64 / 100.0, k as f64 / 100.0]);
+        }
+        let panel =
+            Panel { title: None, columns: vec![1], y_desc: "y".into(), y_limits: None, window: None, band: None };
+        let corner = quiet_corner(&trace, trace.t(), &panel, (0, 101), ([0.0, 1.0], [0.0, 1.0]), 1);
+        assert!(matches!(corner, SeriesLabelPosition::UpperLeft), "{corner:?}");
+    }
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(
+            [tick(&250.0), tick(&-0.0), tick(&0.25), tick(&-1e-13), tick(&1.5e-3)],
+            ["250", "0", "0.25", "0", "0.0015"]
+        );
     }
 
     #[test]
