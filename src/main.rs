@@ -189,6 +189,11 @@ fn check(graph: &Path, sets: &[String]) -> Result<(), Failure> {
     }
     let model = ctlgraph_core::compile(&flat, &ctlgraph::registry())?;
     println!("{}: ok", graph.display());
+    for c in &model.checks {
+        if let Some(problem) = c.window_problem(model.sim.stop) {
+            println!("  warning: check `{}`: {problem}: it will be skipped", c.name);
+        }
+    }
     println!("execution order:");
     let width = model.meta.iter().map(|m| m.name.len()).max().unwrap_or(0);
     for (i, m) in model.meta.iter().enumerate() {

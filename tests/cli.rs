@@ -271,6 +271,18 @@ fn a_check_window_after_the_stop_time_is_skipped_with_its_reason() {
     let stdout = text(&out.stdout);
     assert!(stdout.contains("  skip  steady  (its window starts at 2 s, after the stop time 1 s)"), "{stdout}");
     assert!(!stdout.contains("FAIL  steady"), "{stdout}");
+    // `check` knows the file's stop time and says so before any run.
+    let dir = tempfile::tempdir().unwrap();
+    let short = dir.path().join("short.yaml");
+    let text_in = std::fs::read_to_string("graphs/tutorial/pid_loop.yaml").unwrap().replace("stop: 3.0", "stop: 1.5");
+    std::fs::write(&short, text_in).unwrap();
+    let out = ctlgraph(&["check", path(&short)]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(
+        text(&out.stdout).contains("warning: check `steady`: its window starts at 2 s, after the stop time 1.5 s"),
+        "{}",
+        text(&out.stdout)
+    );
 }
 
 #[test]
