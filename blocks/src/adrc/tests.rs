@@ -65,3 +65,32 @@ fn discrete_leso_estimates_a_constant_disturbance_on_a_double_integrator() {
     assert!((z[1] - (f + b0 * u) * t).abs() < 1e-3, "velocity estimate {}", z[1]);
     assert!((z[0] - (f + b0 * u) * t * t / 2.0).abs() < 1e-4, "position estimate {}", z[0]);
 }
+
+#[test]
+fn fst_outside_the_linear_band_uses_a0_exactly() {
+    // |c| > d0 but |a| <= d: F = −δ·a/d with a = x2 + (a0 − d)/2·sign(c),
+    // a0 = sqrt(d² + 8δ|c|). Value from an independent transcription of
+    // Han's fst (Python, recorded): a constant other than 8 in a0 gives −100.
+    let f = fst(-1.0, 13.6, 100.0, 0.01, 0.01);
+    assert!((f - (-94.51529845459615)).abs() < 1e-9, "fst = {f}");
+}
+
+#[test]
+fn discrete_leso_first_steps_by_hand() {
+    // Eq. 8 by forward Euler, ω = 200 (β = 600, 1.2e5, 8e6), b0 = 2,
+    // h = 1 ms, y = 1 and u = 0.5 from z = 0; values from an independent
+    // transcription of eq. 8 (Python, recorded). Every gain shows in them.
+    let mut leso = Leso::new(bandwidth_gains(2, 200.0), 2.0, 1e-3, vec![0.0; 3]);
+    let expected = [
+        [0.6, 120.001, 8000.0],
+        [0.9600009999999999, 176.002, 11200.0],
+        [1.1600024, 192.00288000000003, 11519.992],
+        [1.25600384, 184.32358400000004, 10239.9728],
+    ];
+    for (k, want) in expected.iter().enumerate() {
+        leso.step(1.0, 0.5);
+        for (i, (&z, &w)) in leso.state().iter().zip(want).enumerate() {
+            assert!((z - w).abs() <= 1e-9 * w.abs().max(1.0), "step {}: z{} = {z}, expected {w}", k + 1, i + 1);
+        }
+    }
+}
