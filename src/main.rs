@@ -207,7 +207,7 @@ fn check(graph: &Path, sets: &[String]) -> Result<(), Failure> {
         model.signal_len,
         model.clocks.len(),
         solver.name(),
-        model.sim.stop
+        ctlgraph::record::Number(model.sim.stop)
     );
     Ok(())
 }

@@ -29,8 +29,8 @@ impl Vary {
         let (name, range) = arg.split_once('=').ok_or_else(bad)?;
         let (lo, hi) = range.split_once("..").ok_or_else(bad)?;
         let (lo, hi) = (lo.trim().parse::<f64>().map_err(|_| bad())?, hi.trim().parse::<f64>().map_err(|_| bad())?);
-        if !lo.is_finite() || !hi.is_finite() || lo >= hi {
-            return Err(Diagnostic::plain(format!("--vary {arg}: need finite LO < HI")));
+        if !lo.is_finite() || !hi.is_finite() || lo >= hi || !(hi - lo).is_finite() {
+            return Err(Diagnostic::plain(format!("--vary {arg}: need finite LO < HI with a finite span")));
         }
         Ok(Vary { name: name.trim().to_string(), lo, hi })
     }
@@ -100,6 +100,11 @@ pub fn run(graph: &Path, cfg: &PropConfig, tick: &(dyn Fn() + Sync)) -> Result<P
     let model = crate::compile_file(graph, &[])?;
     if model.checks.is_empty() {
         return Err(Diagnostic::in_file(&graph.display().to_string(), "has no `checks:` to test").into());
+    }
+    for (i, v) in cfg.vary.iter().enumerate() {
+        if cfg.vary[..i].iter().any(|w| w.name == v.name) {
+            return Err(Diagnostic::plain(format!("--vary {}: given twice", v.name)).into());
+        }
     }
     let flat = ctlgraph_core::load(graph, &[])?;
     let mut steps_from_nominal: Vec<BoxedStrategy<i64>> = Vec::new();

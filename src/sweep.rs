@@ -46,7 +46,7 @@ impl Vary {
             };
             let (lo, hi) = (number(lo)?, number(hi)?);
             if lo >= hi || !(hi - lo).is_finite() {
-                return Err(bad("need LO < HI"));
+                return Err(bad("need LO < HI with a finite span"));
             }
             return Ok(match n {
                 Some(n) => {

@@ -316,3 +316,33 @@ fn a_subsystem_file_checks_on_its_own_and_its_ports_are_named_as_written() {
     let out = ctlgraph(&["check", path(&outer)]);
     assert!(text(&out.stderr).contains("input `plant.F` is wired twice"), "{}", text(&out.stderr));
 }
+
+#[test]
+fn limits_follow_the_run_not_the_file() {
+    // The default max_step follows --stop-time (stop/200), not the file's stop.
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("short.yaml");
+    std::fs::write(&g, "simulation: { stop: 1.0e-4 }\nblocks:\n  u: { type: sine }\n  p: { type: transfer_function, num: [1], den: [1, 1] }\nwires: [u -> p]\n").unwrap();
+    let json = dir.path().join("r.json");
+    let out = ctlgraph(&["run", path(&g), "--stop-time", "1", "--report", path(&json)]);
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["solver"]["max_step"], 0.005);
+    assert!(report["statistics"]["major_steps"].as_u64().unwrap() < 1000, "{}", report["statistics"]);
+    // Tiny sample times print in short form.
+    let tiny = dir.path().join("tiny.yaml");
+    std::fs::write(
+        &tiny,
+        "blocks:\n  u: { type: step }\n  z: { type: zero_order_hold, sample_time: 1.0e-300 }\nwires: [u -> z]\n",
+    )
+    .unwrap();
+    let out = ctlgraph(&["check", path(&tiny)]);
+    assert!(text(&out.stdout).contains("discrete 1e-300"), "{}", text(&out.stdout));
+    // prop refuses a range with an infinite span and a parameter given twice.
+    let out = ctlgraph(&["prop", "graphs/tutorial/pid_loop.yaml", "--vary", "ki=-1e308..1e308"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("finite span"), "{}", text(&out.stderr));
+    let out = ctlgraph(&["prop", "graphs/tutorial/pid_loop.yaml", "--vary", "kp=1..2", "--vary", "kp=2..3"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("--vary kp: given twice"), "{}", text(&out.stderr));
+}

@@ -292,3 +292,36 @@ fn zpk_conjugates_written_twice_are_reported() {
     let repeated = "blocks:\n  u: { type: step }\n  g: { type: zpk, poles: [[-1, 2], [-1, 2]] }\nwires: [u -> g]\n";
     assert!(ctlgraph::compile_str(repeated, "test.yaml", &[]).is_ok());
 }
+
+#[test]
+fn values_that_cannot_be_right_are_refused_where_written() {
+    // A coefficient 1/0 (NaN-free but infinite) in a denominator or a gain.
+    let tau = "parameters: { tau: \"1/0\" }\nblocks:\n  u: { type: step }\n  p: { type: transfer_function, num: [1], den: [tau, 1] }\nwires: [u -> p]\n";
+    check(
+        tau,
+        4,
+        col(tau, 4, "tau, 1"),
+        "block `p` (transfer_function): `den`: inf is not finite",
+        Some("must be finite"),
+    );
+    let gain = "blocks:\n  u: { type: step }\n  g: { type: gain, k: \"1/0\" }\nwires: [u -> g]\n";
+    check(gain, 3, col(gain, 3, "1/0"), "block `g` (gain): `k`: inf is not finite", None);
+    // YAML's .nan is refused, its .inf accepted like the expressions' inf.
+    let nan = "blocks:\n  u: { type: step }\n  g: { type: gain, k: .nan }\nwires: [u -> g]\n";
+    check(nan, 3, col(nan, 3, ".nan"), "block `g` (gain): `k` is not a number (NaN)", None);
+    let inf = "blocks:\n  u: { type: step }\n  s: { type: saturation, upper: .inf, lower: -.inf }\nwires: [u -> s]\n";
+    assert!(ctlgraph::compile_str(inf, "test.yaml", &[]).is_ok());
+    // Reserved names.
+    for name in ["pi", "inf", "t"] {
+        let yaml = format!("parameters: {{ {name}: 3 }}\nblocks:\n  u: {{ type: step }}\n");
+        check(&yaml, 1, col(&yaml, 1, &format!("{name}:")), &format!("parameter `{name}`: the name is reserved"), None);
+    }
+    // A transfer function beyond the order limit says what to use instead.
+    let den: Vec<String> = (0..=120).map(|_| "1".to_string()).collect();
+    let big = format!(
+        "blocks:\n  u: {{ type: step }}\n  p: {{ type: transfer_function, num: [1], den: [{}] }}\nwires: [u -> p]\n",
+        den.join(", ")
+    );
+    let d = error(&big);
+    assert!(d.message.contains("order 120 is above the limit of 100") && d.message.contains("state_space"), "{d}");
+}

@@ -46,15 +46,30 @@ impl SampleTime {
     }
 }
 
+/// A time in its shortest form: plain between 1e-4 and 1e15, else with an
+/// exponent (`1e-300`, not three hundred digits).
+struct Seconds(f64);
+
+impl fmt::Display for Seconds {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = self.0;
+        if v == 0.0 || (1e-4..1e15).contains(&v.abs()) || !v.is_finite() {
+            write!(f, "{v}")
+        } else {
+            write!(f, "{v:e}")
+        }
+    }
+}
+
 impl fmt::Display for SampleTime {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SampleTime::Continuous => f.write_str("continuous"),
             SampleTime::Discrete { period, offset } if *offset == 0.0 => {
-                write!(f, "discrete {period}")
+                write!(f, "discrete {}", Seconds(*period))
             }
             SampleTime::Discrete { period, offset } => {
-                write!(f, "discrete {period} offset {offset}")
+                write!(f, "discrete {} offset {}", Seconds(*period), Seconds(*offset))
             }
             SampleTime::Inherited => f.write_str("inherited"),
             SampleTime::Constant => f.write_str("constant"),

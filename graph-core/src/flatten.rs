@@ -23,6 +23,9 @@ pub struct SimConfig {
     pub method: Method,
     pub seed: u64,
     pub zero_crossing: ZeroCrossing,
+    /// Whether `max_step` was left to its default, which then follows the
+    /// run's effective stop time (`--stop-time`), not the file's.
+    pub default_max_step: bool,
 }
 
 /// `solver: { zero_crossing: … }`: whether the simulator locates the zero
@@ -151,6 +154,11 @@ fn eval_parameters(
 ) -> Result<Vec<(String, f64)>, Diagnostic> {
     let mut scope: Vec<(String, f64)> = Vec::new();
     for (key, value) in defs {
+        // `pi` and `inf` are constants of every expression, `t` is time in `fcn`.
+        if ["pi", "inf", "t"].contains(&key.name.as_str()) {
+            return Err(Diagnostic::at(&key.pos, format!("parameter `{}`: the name is reserved", key.name))
+                .with_hint("`pi` and `inf` are built-in constants and `t` is time in `fcn`: choose another name"));
+        }
         let v = match overrides.iter().find(|(n, _, _)| *n == key.name) {
             Some((_, Override::Value(v), _)) => *v,
             Some((name, Override::Text(text), _)) => {
@@ -176,6 +184,9 @@ fn eval_parameters(
                 }
             },
         };
+        if v.is_nan() {
+            return Err(Diagnostic::at(&value.pos, format!("parameter `{}` is not a number (NaN)", key.name)));
+        }
         scope.push((key.name.clone(), v));
     }
     Ok(scope)
@@ -262,7 +273,7 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
             Method::DormandPrince {
                 rtol: opt("rtol")?.unwrap_or(1e-6),
                 atol: opt("atol")?.unwrap_or(1e-9),
-                max_step: opt("max_step")?.unwrap_or(stop / 200.0),
+                max_step: opt("max_step")?.unwrap_or(f64::NAN),
                 initial_step: opt("initial_step")?,
             }
         }
@@ -271,7 +282,7 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
             Method::Trbdf2 {
                 rtol: opt("rtol")?.unwrap_or(1e-6),
                 atol: opt("atol")?.unwrap_or(1e-9),
-                max_step: opt("max_step")?.unwrap_or(stop / 10.0),
+                max_step: opt("max_step")?.unwrap_or(f64::NAN),
                 initial_step: opt("initial_step")?,
             }
         }
@@ -310,7 +321,9 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
             }
         },
     };
-    Ok(SimConfig { stop, method, seed, zero_crossing })
+    let default_max_step = method.max_step().is_nan();
+    let method = if default_max_step { method.with_max_step(method.default_max_step(stop)) } else { method };
+    Ok(SimConfig { stop, method, seed, zero_crossing, default_max_step })
 }
 
 fn check_keys(entries: &[(Key, Yaml)], known: &[&str], section: &str) -> Result<(), Diagnostic> {

@@ -108,14 +108,21 @@ impl<'a> Params<'a> {
 
     /// Evaluates a number or an expression over the graph parameters.
     pub fn number_value(&self, key: &str, v: &Yaml) -> Result<f64, Diagnostic> {
-        match &v.kind {
-            Kind::Num(x) => Ok(*x),
+        let x = match &v.kind {
+            Kind::Num(x) => *x,
             Kind::Str(s) => eval_number(s, &v.pos, self.scope).map_err(|d| {
                 let message = format!("block `{}` ({}): `{key}`: {}", self.block, self.type_name, d.message);
                 Diagnostic { message, ..d }
-            }),
-            _ => Err(self.error(key, format!("expected a number, found {}", v.describe()))),
+            })?,
+            _ => return Err(self.error(key, format!("expected a number, found {}", v.describe()))),
+        };
+        if x.is_nan() {
+            return Err(Diagnostic::at(
+                &v.pos,
+                format!("block `{}` ({}): `{key}` is not a number (NaN)", self.block, self.type_name),
+            ));
         }
+        Ok(x)
     }
 
     /// A required number.
@@ -196,12 +203,28 @@ impl<'a> Params<'a> {
         }
     }
 
+    /// A list of finite numbers (coefficients, gains, initial states).
     fn vector_value(&self, key: &str, v: &Yaml) -> Result<Vec<f64>, Diagnostic> {
-        match &v.kind {
-            Kind::Seq(items) => items.iter().map(|i| self.number_value(key, i)).collect(),
-            Kind::Num(_) | Kind::Str(_) => Ok(vec![self.number_value(key, v)?]),
-            _ => Err(self.error(key, format!("expected a list of numbers, found {}", v.describe()))),
-        }
+        let items = match &v.kind {
+            Kind::Seq(items) => items.as_slice(),
+            Kind::Num(_) | Kind::Str(_) => std::slice::from_ref(v),
+            _ => return Err(self.error(key, format!("expected a list of numbers, found {}", v.describe()))),
+        };
+        items
+            .iter()
+            .map(|i| {
+                let x = self.number_value(key, i)?;
+                if x.is_finite() {
+                    Ok(x)
+                } else {
+                    Err(Diagnostic::at(
+                        &i.pos,
+                        format!("block `{}` ({}): `{key}`: {x} is not finite", self.block, self.type_name),
+                    )
+                    .with_hint("coefficients, gains and initial values must be finite numbers"))
+                }
+            })
+            .collect()
     }
 
     /// A matrix as a list of rows; a list of numbers is one row, a number a 1×1.

@@ -89,6 +89,9 @@ pub fn lookup<'a>(map: &'a [(Key, Yaml)], name: &str) -> Option<&'a Yaml> {
 pub fn parse(text: &str, file: &Arc<str>) -> Result<Yaml, Diagnostic> {
     let mut options = serde_saphyr::Options::default();
     options.strict_booleans = true;
+    // `.inf` is YAML's infinity, as `inf` is the expressions'; a NaN is
+    // refused where the number is used, at its position.
+    options.non_finite_float_policy = serde_saphyr::NonFiniteFloatPolicy::PassThrough;
     match serde_saphyr::from_str_with_options::<Spanned<Node>>(text, options) {
         Ok(root) => Ok(convert(root, file)),
         Err(err) => Err(syntax_error(&err, file)),

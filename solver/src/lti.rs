@@ -30,7 +30,14 @@ pub enum LtiError {
     Shape(String),
     /// Roots not in conjugate pairs.
     Roots(String),
+    /// A polynomial of higher degree than [`MAX_ORDER`].
+    TooHigh { degree: usize },
 }
+
+/// The highest order a transfer function may have. Beyond it the companion
+/// realisation is numerically useless (its coefficients span hundreds of
+/// decades) and the dense step costs O(n²).
+pub const MAX_ORDER: usize = 100;
 
 impl fmt::Display for LtiError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -41,6 +48,11 @@ impl fmt::Display for LtiError {
             ),
             LtiError::ZeroDenominator => f.write_str("the denominator is zero"),
             LtiError::Shape(s) | LtiError::Roots(s) => f.write_str(s),
+            LtiError::TooHigh { degree } => write!(
+                f,
+                "order {degree} is above the limit of {MAX_ORDER}: realise a large model as a state_space \
+                 (balanced, from your modelling tool) or as a cascade of smaller transfer functions"
+            ),
         }
     }
 }
@@ -125,6 +137,9 @@ pub fn tf2ss(num: &[f64], den: &[f64]) -> Result<StateSpace, LtiError> {
     }
     let num = poly::trim_leading_zeros(num);
     let (nd, nn) = (den.len() - 1, num.len().saturating_sub(1));
+    if nd.max(nn) > MAX_ORDER {
+        return Err(LtiError::TooHigh { degree: nd.max(nn) });
+    }
     if num.len() > den.len() {
         return Err(LtiError::Improper { num_degree: nn, den_degree: nd });
     }

@@ -143,7 +143,10 @@ impl Simulator {
     /// `None`) and computes the initial states.
     pub fn new(model: Model, stop: Option<f64>) -> Self {
         let stop = stop.unwrap_or(model.sim.stop);
-        let method = model.sim.method;
+        let method = match model.sim.method {
+            m if model.sim.default_max_step => m.with_max_step(m.default_max_step(stop)),
+            m => m,
+        };
         let grid_step = if method.is_adaptive() { 0.0 } else { method.max_step() };
         let clocks: Vec<Clock> = model
             .clocks

@@ -63,6 +63,29 @@ impl Method {
         }
     }
 
+    /// The `max_step` an adaptive method takes when the graph gives none,
+    /// for a run to `stop`: dopri5 samples at least 200 times per run (so
+    /// continuous sources are resolved), trbdf2 10 times (its steps are
+    /// meant to grow).
+    pub fn default_max_step(&self, stop: f64) -> f64 {
+        match self {
+            Method::DormandPrince { .. } => stop / 200.0,
+            Method::Trbdf2 { .. } => stop / 10.0,
+            fixed => fixed.max_step(),
+        }
+    }
+
+    /// The same method with another `max_step` (adaptive methods only).
+    pub fn with_max_step(self, h: f64) -> Self {
+        match self {
+            Method::DormandPrince { rtol, atol, initial_step, .. } => {
+                Method::DormandPrince { rtol, atol, max_step: h, initial_step }
+            }
+            Method::Trbdf2 { rtol, atol, initial_step, .. } => Method::Trbdf2 { rtol, atol, max_step: h, initial_step },
+            fixed => fixed,
+        }
+    }
+
     /// Whether the method chooses its own step sizes.
     pub fn is_adaptive(&self) -> bool {
         matches!(self, Method::DormandPrince { .. } | Method::Trbdf2 { .. })
