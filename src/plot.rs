@@ -88,6 +88,8 @@ fn draw_panel<DB: DrawingBackend>(
         Some([a, b]) => (a, b),
         None => y_range(p.columns.iter().map(|&c| &trace.columns[c][first..last]), p.band),
     };
+    // The axis code works with hi − lo: keep it finite (values near ±f64::MAX).
+    let (lo, hi) = if (hi - lo).is_finite() { (lo, hi) } else { (lo.max(f64::MIN / 4.0), hi.min(f64::MAX / 4.0)) };
     let mut builder = ChartBuilder::on(area);
     builder.margin(12).x_label_area_size(36).y_label_area_size(70);
     if let Some(title) = &p.title {

@@ -346,3 +346,35 @@ fn limits_follow_the_run_not_the_file() {
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("--vary kp: given twice"), "{}", text(&out.stderr));
 }
+
+#[test]
+fn plotting_values_near_the_largest_double_returns() {
+    // The axis range of ±1.7e308 overflowed to infinity and the plot never
+    // returned; a guard of a minute stands in for "never".
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("big.yaml");
+    std::fs::write(
+        &g,
+        "simulation: { stop: 0.01, solver: { method: rk4, step: 1.0e-3 } }\nblocks:\n  c: { type: constant, value: 1.7e308 }\n  d: { type: constant, value: -1.7e308 }\nrecord: [c, d]\nscopes:\n  - { signals: [c, d] }\n",
+    )
+    .unwrap();
+    let svg = dir.path().join("big.svg");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ctlgraph"))
+        .args(["run", path(&g), "--plot", path(&svg)])
+        .env("CI", "1")
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if start.elapsed() > std::time::Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("ctlgraph run --plot did not return");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    assert!(status.success() && svg.exists());
+}
