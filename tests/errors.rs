@@ -325,3 +325,17 @@ fn values_that_cannot_be_right_are_refused_where_written() {
     let d = error(&big);
     assert!(d.message.contains("order 120 is above the limit of 100") && d.message.contains("state_space"), "{d}");
 }
+
+#[test]
+fn data_files_must_be_regular_finite_and_interpolable() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = |file: &str| format!("blocks:\n  s: {{ type: from_csv, file: \"{file}\", column: y }}\n");
+    // A device never ends: refused before reading.
+    let d = error(&graph("/dev/zero"));
+    assert!(d.to_string().contains("`/dev/zero` is not a regular file"), "{d}");
+    // Neighbouring values whose difference overflows would interpolate to NaN.
+    let csv = dir.path().join("big.csv");
+    std::fs::write(&csv, "t,y\n0,-1e308\n1,1e308\n").unwrap();
+    let d = error(&graph(csv.to_str().unwrap()));
+    assert!(d.to_string().contains("points 1 and 2 are too far apart to interpolate"), "{d}");
+}

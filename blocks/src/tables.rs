@@ -78,6 +78,16 @@ impl Table {
         if x[0] == x[x.len() - 1] {
             return Err("breakpoints span no interval".into());
         }
+        // Interpolation takes differences: they must stay finite (±1e308 next
+        // to each other would give NaN at run time).
+        let overflow = |v: &[f64]| v.windows(2).position(|w| !(w[1] - w[0]).is_finite());
+        if let Some(i) = overflow(&x).or_else(|| overflow(&y)) {
+            return Err(format!(
+                "points {} and {} are too far apart to interpolate between (their difference overflows)",
+                i + 1,
+                i + 2
+            ));
+        }
         Ok(Table { x, y, outside })
     }
 
@@ -152,9 +162,26 @@ fn build_from_csv(p: &mut Params) -> Result<Built, Diagnostic> {
     crate::sources::windowed(p, Built::new(Series(table), Interface::new(st).output("y", Width::Fixed(1))))
 }
 
+/// The largest data file a block reads (256 MiB): a CSV that size holds
+/// some ten million rows; anything larger is more likely a wrong path.
+pub const MAX_DATA_FILE: u64 = 256 << 20;
+
 /// Reads two columns by header name; errors name the file, row and column.
+/// Only regular files up to [`MAX_DATA_FILE`] are read (not a FIFO or a
+/// device such as /dev/zero, which never end).
 pub(crate) fn read_columns(path: &std::path::Path, time: &str, column: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
     let shown = path.display();
+    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
+    if !meta.is_file() {
+        return Err(format!("`{shown}` is not a regular file (a device, FIFO or folder): give a CSV file"));
+    }
+    if meta.len() > MAX_DATA_FILE {
+        return Err(format!(
+            "`{shown}` is {} MiB, above the limit of {} MiB for data files",
+            meta.len() >> 20,
+            MAX_DATA_FILE >> 20
+        ));
+    }
     let mut reader = csv::Reader::from_path(path).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
     let headers = reader.headers().map_err(|e| format!("`{shown}`: {e}"))?.clone();
     let find = |name: &str| {

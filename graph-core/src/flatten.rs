@@ -343,6 +343,9 @@ fn sub_ports(g: &GraphFile) -> (Vec<String>, Vec<String>) {
     (of(INPORT), of(OUTPORT))
 }
 
+/// The most blocks a graph may expand to (subsystems flattened).
+pub const MAX_BLOCKS: usize = 1_000_000;
+
 fn expand(
     g: &GraphFile,
     prefix: &str,
@@ -355,6 +358,13 @@ fn expand(
     for b in &g.blocks {
         let path = format!("{prefix}{}", b.name);
         if b.type_name != SUBSYSTEM {
+            if out.blocks.len() >= MAX_BLOCKS {
+                return Err(Diagnostic::at(
+                    &b.pos,
+                    format!("the graph expands to more than {MAX_BLOCKS} blocks (here, at `{path}`)"),
+                )
+                .with_hint("subsystems included many times over multiply: look for an include chain that doubles"));
+            }
             out.blocks.push(FlatBlock { path, spec: b.clone(), scope: scope.clone(), dir: dir.clone() });
             continue;
         }
