@@ -339,3 +339,52 @@ fn data_files_must_be_regular_finite_and_interpolable() {
     let d = error(&graph(csv.to_str().unwrap()));
     assert!(d.to_string().contains("points 1 and 2 are too far apart to interpolate"), "{d}");
 }
+
+#[test]
+fn deep_input_is_refused_not_a_stack_overflow() {
+    let with =
+        |expr: &str| format!("blocks:\n  g: {{ type: gain, k: \"{expr}\" }}\n  u: {{ type: step }}\nwires: [u -> g]\n");
+    // The campaign's inputs: refused by length or depth, never a crash.
+    let refused = |m: &str| m.contains("nested too deeply") || m.contains("expression too long");
+    for deep in [
+        format!("{}1{}", "(".repeat(10_000), ")".repeat(10_000)),
+        format!("{}1{}", "abs(".repeat(10_000), ")".repeat(10_000)),
+        format!("{}1", "-".repeat(100_000)),
+        vec!["1"; 100_000].join("+"),
+    ] {
+        let d = error(&with(&deep));
+        assert!(refused(&d.message), "{}", d.message);
+    }
+    // Depth alone, within the length limit.
+    for deep in [
+        format!("{}1{}", "(".repeat(300), ")".repeat(300)),
+        format!("{}1{}", "abs(".repeat(300), ")".repeat(300)),
+        format!("{}1", "-".repeat(300)),
+    ] {
+        assert!(error(&with(&deep)).message.contains("nested too deeply (limit 256)"));
+    }
+    // Within the limits, deep is fine.
+    let ok = format!("{}1{}", "(".repeat(200), ")".repeat(200));
+    assert!(ctlgraph::compile_str(&with(&ok), "test.yaml", &[]).is_ok());
+    // Subsystems that include each other a hundred levels deep.
+    let dir = tempfile::tempdir().unwrap();
+    for k in 0..100 {
+        let body = if k < 99 {
+            format!(
+                "blocks:\n  i: {{ type: inport }}\n  s: {{ type: subsystem, file: s{}.yaml }}\n  o: {{ type: outport }}\nwires: [i -> s, s -> o]\n",
+                k + 1
+            )
+        } else {
+            "blocks:\n  i: { type: inport }\n  o: { type: outport }\nwires: [i -> o]\n".to_string()
+        };
+        std::fs::write(dir.path().join(format!("s{k}.yaml")), body).unwrap();
+    }
+    let top = dir.path().join("top.yaml");
+    std::fs::write(
+        &top,
+        "blocks:\n  c: { type: constant }\n  s: { type: subsystem, file: s0.yaml }\nwires: [c -> s]\n",
+    )
+    .unwrap();
+    let d = ctlgraph::compile_file(&top, &[]).err().expect("refused");
+    assert!(d.message.contains("subsystems nested too deeply (limit 64)"), "{d}");
+}

@@ -346,6 +346,9 @@ fn sub_ports(g: &GraphFile) -> (Vec<String>, Vec<String>) {
 /// The most blocks a graph may expand to (subsystems flattened).
 pub const MAX_BLOCKS: usize = 1_000_000;
 
+/// The deepest chain of subsystems including subsystems.
+pub const MAX_DEPTH: usize = 64;
+
 fn expand(
     g: &GraphFile,
     prefix: &str,
@@ -456,6 +459,9 @@ fn load_subsystem(
     }
     let sub_scope = Arc::new(eval_parameters(&sub.parameters, &overrides)?);
     let sub_dir = Arc::new(sub_path.parent().map(Path::to_path_buf).unwrap_or_default());
+    if stack.len() >= MAX_DEPTH {
+        return Err(Diagnostic::at(&b.pos, format!("{what}: subsystems nested too deeply (limit {MAX_DEPTH})")));
+    }
     stack.push(canon);
     expand(&sub, &format!("{path}/"), sub_scope, sub_dir, out, stack)?;
     stack.pop();

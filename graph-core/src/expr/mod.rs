@@ -147,7 +147,14 @@ impl Expr {
     /// Parses `src`, resolving names through `scope`.
     pub fn parse(src: &str, scope: &dyn Scope) -> Result<Expr, ExprError> {
         let tokens = lex(src)?;
-        let mut p = Parser { tokens, at: 0, scope, len: src.chars().count() };
+        if tokens.len() > MAX_TOKENS {
+            return Err(ExprError {
+                offset: tokens[MAX_TOKENS].offset,
+                message: format!("expression too long (limit {MAX_TOKENS} numbers, names and symbols)"),
+                hint: Some("compute it in steps: parameters, or several blocks".into()),
+            });
+        }
+        let mut p = Parser { tokens, at: 0, scope, len: src.chars().count(), nesting: 0 };
         let root = p.expr()?;
         if let Some(tok) = p.peek() {
             return Err(p.error_at(tok.offset, format!("unexpected {} after the end of the expression", tok.kind)));
@@ -331,11 +338,20 @@ fn lex(src: &str) -> Result<Vec<Tok>, ExprError> {
     Ok(out)
 }
 
+/// The most tokens an expression may have: its tree, evaluated
+/// recursively, then stays a few thousand levels deep at most.
+pub const MAX_TOKENS: usize = 4096;
+
+/// The deepest nesting of parentheses, calls, signs and powers.
+pub const MAX_NESTING: usize = 256;
+
 struct Parser<'a> {
     tokens: Vec<Tok>,
     at: usize,
     scope: &'a dyn Scope,
     len: usize,
+    /// Current depth of recursive descent into nested constructs.
+    nesting: usize,
 }
 
 impl Parser<'_> {
@@ -396,7 +412,23 @@ impl Parser<'_> {
         }
     }
 
+    /// Runs `inner` one nesting level deeper, refusing to go past
+    /// [`MAX_NESTING`] (deep input must not overflow the stack).
+    fn nested<T>(&mut self, inner: impl FnOnce(&mut Self) -> Result<T, ExprError>) -> Result<T, ExprError> {
+        if self.nesting >= MAX_NESTING {
+            return Err(self.error_at(self.end_offset(), format!("nested too deeply (limit {MAX_NESTING})")));
+        }
+        self.nesting += 1;
+        let result = inner(self);
+        self.nesting -= 1;
+        result
+    }
+
     fn unary(&mut self) -> Result<Node, ExprError> {
+        self.nested(Self::unary_inner)
+    }
+
+    fn unary_inner(&mut self) -> Result<Node, ExprError> {
         if self.eat('-') {
             return Ok(Node::Neg(Box::new(self.unary()?)));
         }
