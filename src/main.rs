@@ -338,6 +338,20 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
             .with_hint("name the file .svg (rsvg-convert or a browser turns it into PNG)")
             .into());
     }
+    // An output must not overwrite the graph or another output.
+    let same = |a: &Path, b: &Path| a == b || a.canonicalize().ok().is_some_and(|x| b.canonicalize().ok() == Some(x));
+    let outputs: Vec<(&str, &Path)> = [("--out", opts.out), ("--plot", opts.plot), ("--report", opts.report)]
+        .into_iter()
+        .filter_map(|(f, p)| p.map(|p| (f, p)))
+        .collect();
+    for (i, (flag, p)) in outputs.iter().enumerate() {
+        if same(p, graph) {
+            return Err(Diagnostic::plain(format!("{flag} {}: that is the graph file", p.display())).into());
+        }
+        if let Some((other, _)) = outputs[..i].iter().find(|(_, q)| same(p, q) && p != &Path::new("-")) {
+            return Err(Diagnostic::plain(format!("{flag} {}: also given to {other}", p.display())).into());
+        }
+    }
     // `--out -`: the CSV goes to stdout, the summary to stderr.
     let to_stdout = opts.out.is_some_and(|p| p == Path::new("-"));
     let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;

@@ -378,3 +378,34 @@ fn plotting_values_near_the_largest_double_returns() {
     };
     assert!(status.success() && svg.exists());
 }
+
+#[test]
+fn runs_that_cannot_finish_and_outputs_that_would_clobber_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("g.yaml");
+    std::fs::write(
+        &g,
+        "simulation: { stop: 1.0, solver: { method: rk4, step: 1.0e-320 } }\nblocks:\n  c: { type: constant }\n",
+    )
+    .unwrap();
+    let out = ctlgraph(&["check", path(&g)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("steps to reach the stop time 1 s (limit 1e10)"), "{}", text(&out.stderr));
+    std::fs::write(
+        &g,
+        "blocks:\n  u: { type: step }\n  z: { type: zero_order_hold, sample_time: 1.0e-300 }\nwires: [u -> z]\n",
+    )
+    .unwrap();
+    let out = ctlgraph(&["run", path(&g)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("block `z`: a sample time of 1e-300 s gives"), "{}", text(&out.stderr));
+    // --out onto the graph, or the same file for two outputs.
+    let out = ctlgraph(&["run", LAG, "--out", LAG]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("that is the graph file"), "{}", text(&out.stderr));
+    let f = dir.path().join("x.svg");
+    let out = ctlgraph(&["run", LAG, "--out", path(&f), "--plot", path(&f)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("also given to --out"), "{}", text(&out.stderr));
+    assert!(std::fs::read_to_string(LAG).unwrap().contains("First-order lag"), "the graph is intact");
+}

@@ -321,6 +321,18 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
             }
         },
     };
+    if !method.is_adaptive() && stop / method.max_step() > MAX_STEPS {
+        let pos =
+            yaml::lookup(solver_entries, "step").map(|v| v.pos.clone()).unwrap_or_else(|| Pos::new("?".into(), 0, 0));
+        return Err(Diagnostic::at(
+            &pos,
+            format!(
+                "a step of {:e} s would take {:e} steps to reach the stop time {stop} s (limit {MAX_STEPS:e})",
+                method.max_step(),
+                stop / method.max_step()
+            ),
+        ));
+    }
     let default_max_step = method.max_step().is_nan();
     let method = if default_max_step { method.with_max_step(method.default_max_step(stop)) } else { method };
     Ok(SimConfig { stop, method, seed, zero_crossing, default_max_step })
@@ -348,6 +360,10 @@ pub const MAX_BLOCKS: usize = 1_000_000;
 
 /// The deepest chain of subsystems including subsystems.
 pub const MAX_DEPTH: usize = 64;
+
+/// The most fixed steps or sample hits a run may need (1e10: hours of
+/// stepping even for a small graph); a finer step or period is refused.
+pub const MAX_STEPS: f64 = 1e10;
 
 fn expand(
     g: &GraphFile,

@@ -123,6 +123,23 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     resolve_widths(&mut nodes, &drivers)?;
     let order = sort(&nodes, &drivers)?;
     let (rates, clocks) = resolve_rates(&nodes, &drivers, &order);
+    for (i, node) in nodes.iter().enumerate() {
+        if let Some(Rate::Discrete(c)) = rates.get(&i) {
+            let period = clocks[*c].0;
+            if g.sim.stop / period > crate::flatten::MAX_STEPS {
+                return Err(Diagnostic::at(
+                    &node.flat.spec.pos,
+                    format!(
+                        "block `{}`: a sample time of {period:e} s gives {:e} hits before the stop time {} s (limit {:e})",
+                        node.flat.path,
+                        g.sim.stop / period,
+                        g.sim.stop,
+                        crate::flatten::MAX_STEPS
+                    ),
+                ));
+            }
+        }
+    }
 
     // Lay out outputs, then point every input at its driver's output.
     let mut out_offset: HashMap<(usize, usize), Port> = HashMap::new();
