@@ -409,3 +409,18 @@ fn runs_that_cannot_finish_and_outputs_that_would_clobber_are_refused() {
     assert!(text(&out.stderr).contains("also given to --out"), "{}", text(&out.stderr));
     assert!(std::fs::read_to_string(LAG).unwrap().contains("First-order lag"), "the graph is intact");
 }
+
+#[test]
+fn a_blow_up_inside_an_adaptive_step_names_the_block() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("blow.yaml");
+    std::fs::write(
+        &g,
+        "simulation: { stop: 2.0, solver: { method: dopri5, initial_step: 1.0e-3 } }\n\
+         blocks:\n  x: { type: integrator, initial: 1e150 }\n  sq: { type: fcn, expr: \"u^2\" }\nwires: [x -> sq, sq -> x]\n",
+    )
+    .unwrap();
+    let out = ctlgraph(&["run", path(&g)]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("block `x`: state 0 (inside the solver's step)"), "{}", text(&out.stderr));
+}

@@ -337,7 +337,21 @@ impl Simulator {
             // method's major steps so continuous sources are sampled finely.
             target.min(t0 + self.integ.method().max_step())
         } else {
-            self.integ.advance(&mut sys, t0, target, &mut self.x).map_err(|error| SimError::Solver { t: t0, error })?
+            match self.integ.advance(&mut sys, t0, target, &mut self.x) {
+                Ok(t) => t,
+                // A state that blew up inside the step: name its block, as a
+                // blow-up at a major step does.
+                Err(SolverError::NonFinite { t, state: Some(k) }) => {
+                    let owner = self.model.meta.iter().find(|m| m.states.contains(&k));
+                    return Err(SimError::NonFinite {
+                        t,
+                        block: owner.map_or("?".to_string(), |m| m.name.clone()),
+                        what: format!("state {} (inside the solver's step)", owner.map_or(k, |m| k - m.states.start)),
+                        value: f64::NAN,
+                    });
+                }
+                Err(error) => return Err(SimError::Solver { t: t0, error }),
+            }
         };
         let event = self.watch.locate(&mut sys, &mut self.integ, t0, t_new, &mut self.x);
         if let Some(t_event) = event {

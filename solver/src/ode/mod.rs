@@ -125,8 +125,9 @@ pub struct Stats {
 pub enum SolverError {
     /// The adaptive step shrank below what floating point can resolve at `t`.
     StepTooSmall { t: f64, step: f64 },
-    /// The error estimate was not finite (the state blew up) at `t`.
-    NonFinite { t: f64 },
+    /// The error estimate was not finite (the state blew up) at `t`;
+    /// `state` is the first component that was not.
+    NonFinite { t: f64, state: Option<usize> },
     /// The Newton matrix `I − d·h·J` is singular at `t`.
     Singular { t: f64 },
 }
@@ -138,7 +139,8 @@ impl fmt::Display for SolverError {
                 f,
                 "step size {step:e} too small at t = {t}: the system is too stiff or discontinuous for the tolerances"
             ),
-            SolverError::NonFinite { t } => write!(f, "state is not finite at t = {t}"),
+            SolverError::NonFinite { t, state: Some(i) } => write!(f, "state {i} is not finite at t = {t}"),
+            SolverError::NonFinite { t, state: None } => write!(f, "state is not finite at t = {t}"),
             SolverError::Singular { t } => write!(f, "the Newton matrix is singular at t = {t}"),
         }
     }
@@ -482,7 +484,8 @@ impl Integrator {
                 atol,
             );
             if !err.is_finite() {
-                return Err(SolverError::NonFinite { t });
+                let state = (0..x.len()).find(|&i| !self.x_new[i].is_finite() || !self.k[6][i].is_finite());
+                return Err(SolverError::NonFinite { t, state });
             }
             if err <= 1.0 {
                 let factor = if err == 0.0 { 5.0 } else { (0.9 * err.powf(-0.2)).clamp(0.2, 5.0) };

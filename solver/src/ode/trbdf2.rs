@@ -171,7 +171,8 @@ impl Integrator {
             w.lin.lu.solve(&mut w.lin.delta);
             let err = scaled_rms(w.lin.delta.iter().copied(), x, &w.y, rtol, atol);
             if !err.is_finite() {
-                return Err(SolverError::NonFinite { t });
+                let state = (0..x.len()).find(|&i| !w.y[i].is_finite() || !w.lin.delta[i].is_finite());
+                return Err(SolverError::NonFinite { t, state });
             }
             if err <= 1.0 {
                 let factor = if err == 0.0 { 5.0 } else { (0.9 * err.powf(-1.0 / 3.0)).clamp(0.2, 5.0) };
