@@ -2,22 +2,10 @@
 //! parameter region (`ctlgraph blocks TYPE` states the region), using the
 //! strategies and harness of `ctlgraph_blocks::testing`.
 
-use ctlgraph::blocks::testing::{self, Harness, Signal, StableZpk};
-use ctlgraph::core::Registry;
+mod common;
+use common::run_block as run;
+use ctlgraph::blocks::testing::{self, Signal, StableZpk};
 use proptest::prelude::*;
-
-fn reg() -> Registry {
-    ctlgraph::registry()
-}
-
-fn run(ty: &str, params: &str, inputs: &[&Signal], stop: f64) -> ctlgraph::record::Trace {
-    let registry = reg();
-    let mut h = Harness::new(&registry, ty, params);
-    for s in inputs {
-        h = h.input(s);
-    }
-    h.run(stop).unwrap_or_else(|e| panic!("{ty} {{ {params} }}: {e}"))
-}
 
 proptest! {
     #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]

@@ -2,17 +2,10 @@
 //! crossing, resettable integrator, transport delays, discrete delay) with
 //! the strategies and harness of `ctlgraph_blocks::testing`.
 
-use ctlgraph::blocks::testing::{self, Harness, Signal};
+mod common;
+use common::run_block as run;
+use ctlgraph::blocks::testing::{self, Signal};
 use proptest::prelude::*;
-
-fn run(ty: &str, params: &str, inputs: &[&Signal], stop: f64) -> ctlgraph::record::Trace {
-    let registry = ctlgraph::registry();
-    let mut h = Harness::new(&registry, ty, params);
-    for s in inputs {
-        h = h.input(s);
-    }
-    h.run(stop).unwrap_or_else(|e| panic!("{ty} {{ {params} }}: {e}"))
-}
 
 proptest! {
     #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]

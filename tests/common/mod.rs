@@ -37,3 +37,14 @@ pub fn max_error(trace: &Trace, column: &str, f: impl Fn(f64) -> f64) -> f64 {
     let ys = trace.column(column).unwrap_or_else(|| panic!("no column {column}"));
     trace.t().iter().zip(ys).map(|(&t, &y)| (y - f(t)).abs()).fold(0.0, f64::max)
 }
+
+/// Runs one library block on test signals (one per input port, in order)
+/// with the property-testing harness; panics with the block and parameters.
+pub fn run_block(ty: &str, params: &str, inputs: &[&ctlgraph::blocks::testing::Signal], stop: f64) -> Trace {
+    let registry = ctlgraph::registry();
+    let mut h = ctlgraph::blocks::testing::Harness::new(&registry, ty, params);
+    for s in inputs {
+        h = h.input(s);
+    }
+    h.run(stop).unwrap_or_else(|e| panic!("{ty} {{ {params} }}: {e}"))
+}
