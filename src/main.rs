@@ -330,6 +330,11 @@ fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> Failure + '_ {
 }
 
 fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
+    // Interrupted (SIGINT, SIGTERM): no half-written temporaries are left.
+    let _ = ctrlc::set_handler(|| {
+        ctlgraph::record::remove_temporaries();
+        std::process::exit(130);
+    });
     if let Some(t) = opts.stop_time.filter(|t| !(*t > 0.0 && t.is_finite())) {
         return Err(Diagnostic::plain(format!("--stop-time {t}: must be a positive number")).into());
     }

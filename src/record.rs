@@ -75,6 +75,7 @@ impl Drop for CsvFile {
         // After a successful commit the temporary name no longer exists.
         self.writer.take();
         let _ = std::fs::remove_file(&self.tmp);
+        forget(&self.tmp);
     }
 }
 
@@ -83,14 +84,59 @@ fn quote(s: &str) -> String {
     if s.contains([',', '"', '\n']) { format!("\"{}\"", s.replace('"', "\"\"")) } else { s.to_string() }
 }
 
+/// Temporary files this process is writing, so that a signal handler can
+/// remove them ([`remove_temporaries`]).
+static LIVE: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+fn forget(tmp: &Path) {
+    if let Ok(mut live) = LIVE.lock() {
+        live.retain(|p| p != tmp);
+    }
+}
+
+/// Removes every temporary file this process has not yet renamed into
+/// place (on SIGINT or SIGTERM: an interrupted run leaves no debris).
+pub fn remove_temporaries() {
+    if let Ok(live) = LIVE.lock() {
+        for p in live.iter() {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+}
+
 /// A hidden temporary name beside `dest` (same folder, so the final
-/// rename is atomic), creating the folder if it is missing.
+/// rename is atomic), creating the folder if it is missing. Temporaries of
+/// the same target left by processes that no longer exist (killed with
+/// SIGKILL) are removed first.
 fn temp_path(dest: &Path) -> std::io::Result<PathBuf> {
     if let Some(dir) = dest.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
     }
     let name = dest.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    Ok(dest.with_file_name(format!(".{name}.{}.tmp", std::process::id())))
+    remove_stale(dest, &name);
+    let tmp = dest.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    if let Ok(mut live) = LIVE.lock() {
+        live.push(tmp.clone());
+    }
+    Ok(tmp)
+}
+
+/// Removes `.NAME.PID.tmp` beside `dest` whose process is gone (Linux:
+/// no /proc/PID; elsewhere nothing is removed).
+fn remove_stale(dest: &Path, name: &str) {
+    let dir = dest.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    let prefix = format!(".{name}.");
+    for e in entries.flatten() {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let Some(pid) = file.strip_prefix(&prefix).and_then(|r| r.strip_suffix(".tmp")) else { continue };
+        if pid.parse::<u32>().is_ok() && !Path::new("/proc").join(pid).exists() {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
 }
 
 /// Writes a whole file atomically (temporary name, then rename).
@@ -100,6 +146,7 @@ pub fn write_atomic(dest: &Path, bytes: &[u8]) -> std::io::Result<()> {
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
+    forget(&tmp);
     result
 }
 

@@ -424,3 +424,29 @@ fn a_blow_up_inside_an_adaptive_step_names_the_block() {
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("block `x`: state 0 (inside the solver's step)"), "{}", text(&out.stderr));
 }
+
+#[test]
+fn an_interrupted_run_leaves_no_temporary_and_stale_ones_are_cleared() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("long.csv");
+    // A stale temporary of a process that no longer exists (pid beyond pid_max).
+    let stale = dir.path().join(".long.csv.999999999.tmp");
+    std::fs::write(&stale, "half").unwrap();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ctlgraph"))
+        .args(["run", "graphs/fladrc/compare.yaml", "--stop-time", "500", "--out", path(&out)])
+        .env("CI", "1")
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let live = dir.path().join(format!(".long.csv.{}.tmp", child.id()));
+    let start = std::time::Instant::now();
+    while !live.exists() && start.elapsed() < std::time::Duration::from_secs(60) {
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    assert!(live.exists(), "the run writes to its temporary");
+    assert!(!stale.exists(), "the stale temporary was removed");
+    std::process::Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130));
+    assert!(!live.exists() && !out.exists(), "nothing half-written is left");
+}
