@@ -36,6 +36,7 @@ pub struct CsvFile {
 
 impl CsvFile {
     pub fn create(dest: &Path, headers: &[String]) -> std::io::Result<Self> {
+        let dest = &output_target(dest)?;
         let tmp = temp_path(dest)?;
         let mut writer = BufWriter::with_capacity(1 << 16, File::create(&tmp)?);
         let header: Vec<String> = headers.iter().map(|h| quote(h)).collect();
@@ -139,8 +140,27 @@ fn remove_stale(dest: &Path, name: &str) {
     }
 }
 
+/// Where an output to `dest` really goes: through a symbolic link to its
+/// target (the link stays a link); never onto a device, FIFO or folder,
+/// nor over a read-only file (those are errors, not replaced).
+pub fn output_target(dest: &Path) -> std::io::Result<PathBuf> {
+    use std::io::{Error, ErrorKind};
+    let target = match std::fs::symlink_metadata(dest) {
+        Ok(m) if m.file_type().is_symlink() => std::fs::canonicalize(dest).unwrap_or_else(|_| dest.to_path_buf()),
+        _ => dest.to_path_buf(),
+    };
+    match std::fs::metadata(&target) {
+        Ok(m) if !m.is_file() => {
+            Err(Error::new(ErrorKind::InvalidInput, "not a regular file: ctlgraph does not replace it"))
+        }
+        Ok(m) if m.permissions().readonly() => Err(Error::new(ErrorKind::PermissionDenied, "the file is read-only")),
+        _ => Ok(target),
+    }
+}
+
 /// Writes a whole file atomically (temporary name, then rename).
 pub fn write_atomic(dest: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let dest = &output_target(dest)?;
     let tmp = temp_path(dest)?;
     let result = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, dest));
     if result.is_err() {

@@ -450,3 +450,31 @@ fn an_interrupted_run_leaves_no_temporary_and_stale_ones_are_cleared() {
     assert_eq!(status.code(), Some(130));
     assert!(!live.exists() && !out.exists(), "nothing half-written is left");
 }
+
+#[test]
+fn outputs_never_replace_what_is_not_a_regular_writable_file() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    // Through a symbolic link: the target gets the CSV, the link stays a link.
+    let real = dir.path().join("real.csv");
+    std::fs::write(&real, "old").unwrap();
+    let link = dir.path().join("link.csv");
+    std::os::unix::fs::symlink(&real, &link).unwrap();
+    assert_eq!(ctlgraph(&["run", LAG, "--out", path(&link)]).status.code(), Some(0));
+    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+    assert!(std::fs::read_to_string(&real).unwrap().starts_with("t,u,y\n"));
+    // A read-only file is not silently replaced.
+    let ro = dir.path().join("ro.csv");
+    std::fs::write(&ro, "keep").unwrap();
+    let mut perms = std::fs::metadata(&ro).unwrap().permissions();
+    perms.set_readonly(true);
+    std::fs::set_permissions(&ro, perms).unwrap();
+    let out = ctlgraph(&["run", LAG, "--out", path(&ro)]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("read-only") && std::fs::read_to_string(&ro).unwrap() == "keep");
+    // A device node stays a device node.
+    let out = ctlgraph(&["run", LAG, "--out", "/dev/full"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("not a regular file"));
+    assert!(std::fs::metadata("/dev/full").unwrap().file_type().is_char_device());
+}
