@@ -388,3 +388,13 @@ fn deep_input_is_refused_not_a_stack_overflow() {
     let d = ctlgraph::compile_file(&top, &[]).err().expect("refused");
     assert!(d.message.contains("subsystems nested too deeply (limit 64)"), "{d}");
 }
+
+#[test]
+fn size_parameters_have_stated_limits() {
+    let rls = "blocks:\n  u: { type: step }\n  r: { type: rls, n: 100000 }\nwires: [u -> r.phi, u -> r.y]\n";
+    let d = error(rls);
+    assert!(d.message.contains("`n`: must be a whole number from 1 to 100, got 100000"), "{d}");
+    let mux = "blocks:\n  u: { type: step }\n  m: { type: mux, widths: [100000000] }\nwires: [u -> m]\n";
+    let d = error(mux);
+    assert!(d.message.contains("whole numbers from 1 to 1e6"), "{d}");
+}

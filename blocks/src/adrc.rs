@@ -267,7 +267,7 @@ impl Block for Leso {
 }
 
 fn build_leso(p: &mut Params) -> Result<Built, Diagnostic> {
-    let order = p.count_or("order", 2)?;
+    let order = p.count_or("order", 2, 3)?;
     if order > 3 {
         return Err(p.error("order", format!("orders 1 to 3 are supported, got {order}")));
     }
@@ -320,7 +320,7 @@ impl Block for Lsef {
 }
 
 fn build_lsef(p: &mut Params) -> Result<Built, Diagnostic> {
-    let order = p.count_or("order", 2)?;
+    let order = p.count_or("order", 2, 3)?;
     if order > 2 {
         return Err(p.error("order", format!("orders 1 and 2 are supported, got {order}")));
     }

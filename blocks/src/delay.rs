@@ -303,7 +303,7 @@ fn history(p: &mut Params) -> Result<(f64, History), Diagnostic> {
         3.0 => true,
         other => return Err(p.error("order", format!("must be 1 (linear) or 3 (cubic), got {other}"))),
     };
-    let capacity = p.count_or("buffer", 1024)?;
+    let capacity = p.count_or("buffer", 1024, 10_000_000)?;
     let limit =
         p.number_where("max_buffer", Some(1e7), |v| (4.0..=1e9).contains(&v), "a number of samples in [4, 1e9]")?;
     Ok((initial, History::new(1, capacity, limit as usize, cubic)))
@@ -374,6 +374,6 @@ pub(crate) fn build_delay_of(p: &mut Params, samples: usize) -> Result<Built, Di
 }
 
 fn build_delay(p: &mut Params) -> Result<Built, Diagnostic> {
-    let samples = p.count_or("samples", 1)?;
+    let samples = p.count_or("samples", 1, 10_000_000)?;
     build_delay_of(p, samples)
 }

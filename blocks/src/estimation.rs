@@ -112,7 +112,7 @@ impl Block for Rls {
 }
 
 fn build_rls(p: &mut Params) -> Result<Built, Diagnostic> {
-    let n = p.count_or("n", 1)?;
+    let n = p.count_or("n", 1, 100)?;
     let lambda = p.number_where("lambda", Some(1.0), |v| v > 0.0 && v <= 1.0, "in (0, 1]")?;
     let p0 = p.number_where("p0", Some(1e4), |v| v > 0.0 && v.is_finite(), "positive")?;
     let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);

@@ -366,7 +366,7 @@ impl Block for Extremum {
 }
 
 fn build_extremum(p: &mut Params, max: bool) -> Result<Built, Diagnostic> {
-    let inputs = p.count_or("inputs", 2)?;
+    let inputs = p.count_or("inputs", 2, 10_000)?;
     if inputs == 1 {
         let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
             .input("u1", Width::Common, true)

@@ -110,14 +110,21 @@ fn structural(p: &mut Params) -> Result<Built, Diagnostic> {
     Err(p.block_error("structural block built directly (internal error)"))
 }
 
+/// The most ports, and the widest signal, a routing block takes.
+const MAX_PORTS: usize = 10_000;
+const MAX_WIDTH: f64 = 1e6;
+
 fn widths(p: &mut Params, count_key: &str) -> Result<Vec<usize>, Diagnostic> {
     if let Some(ws) = p.opt_vector("widths")? {
-        if ws.is_empty() || ws.iter().any(|w| *w < 1.0 || w.fract() != 0.0) {
-            return Err(p.error("widths", "must be positive whole numbers"));
+        if ws.is_empty() || ws.len() > MAX_PORTS || ws.iter().any(|w| *w < 1.0 || w.fract() != 0.0 || *w > MAX_WIDTH) {
+            return Err(p.error(
+                "widths",
+                format!("must be 1 to {MAX_PORTS} whole numbers from 1 to {MAX_WIDTH:e} (signal widths)"),
+            ));
         }
         return Ok(ws.iter().map(|w| *w as usize).collect());
     }
-    Ok(vec![1; p.count_or(count_key, 2)?])
+    Ok(vec![1; p.count_or(count_key, 2, MAX_PORTS)?])
 }
 
 /// Concatenates the inputs in port order.

@@ -179,12 +179,14 @@ impl<'a> Params<'a> {
     }
 
     /// A positive whole number.
-    pub fn count_or(&mut self, key: &str, default: usize) -> Result<usize, Diagnostic> {
+    /// A whole number from 1 to `max`: every size-like parameter has a
+    /// stated bound, checked before anything is allocated.
+    pub fn count_or(&mut self, key: &str, default: usize, max: usize) -> Result<usize, Diagnostic> {
         let v = self.number_or(key, default as f64)?;
-        if v >= 1.0 && v.fract() == 0.0 && v < 1e6 {
+        if v >= 1.0 && v.fract() == 0.0 && v <= max as f64 {
             Ok(v as usize)
         } else {
-            Err(self.error(key, format!("must be a positive whole number, got {v}")))
+            Err(self.error(key, format!("must be a whole number from 1 to {max}, got {v}")))
         }
     }
 

@@ -92,7 +92,7 @@ fn build_fuzzy(p: &mut Params) -> Result<Built, Diagnostic> {
             "lom" => Defuzzification::LargestOfMaximum,
             _ => Defuzzification::Centroid,
         },
-        resolution: p.count_or("resolution", 201)?.max(2),
+        resolution: p.count_or("resolution", 201, 100_000)?.max(2),
     };
     let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?);
     for v in &inputs {
