@@ -172,3 +172,43 @@ fn pid_gains_from_input_ports() {
     let err = max_error(&trace, "pid", |t| if t < 0.5 { 1.0 + 4.0 * t } else { 2.0 + 2.0 });
     assert!(err < 1e-12, "max error {err}");
 }
+
+#[test]
+fn a_block_whose_events_stop_time_is_reported_not_looped_on() {
+    use ctlgraph::core::registry::{BlockType, Built};
+    use ctlgraph::core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+    // Events every 1e-300 s from t = 1: not representable there, so time
+    // would stand still.
+    struct Stuck;
+    impl Block for Stuck {
+        fn output(&mut self, io: &mut Io) {
+            io.set(0, 0.0);
+        }
+        fn next_event(&self, t: f64) -> f64 {
+            if t < 1.0 { 1.0 } else { t + 1e-300 }
+        }
+    }
+    fn build(_: &mut Params) -> Result<Built, Diagnostic> {
+        Ok(Built::new(Stuck, Interface::new(SampleTime::Continuous).output("y", Width::Fixed(1))))
+    }
+    let mut reg = ctlgraph::registry();
+    reg.register(BlockType {
+        name: "stuck",
+        category: "test",
+        summary: "events that do not advance",
+        doc: "test",
+        inputs: &[],
+        outputs: &[],
+        params: &[],
+        build,
+    });
+    let flat = ctlgraph::core::load_str(
+        "simulation: { stop: 2.0 }\nblocks:\n  s: { type: stuck }\n",
+        "stuck.yaml".into(),
+        &[],
+    )
+    .unwrap();
+    let model = ctlgraph::core::compile(&flat, &reg).unwrap();
+    let error = ctlgraph::simulate(model, None).unwrap_err().to_string();
+    assert!(error.contains("t = 1: time does not advance: block `s`"), "{error}");
+}

@@ -478,3 +478,13 @@ fn outputs_never_replace_what_is_not_a_regular_writable_file() {
     assert!(text(&out.stderr).contains("not a regular file"));
     assert!(std::fs::metadata("/dev/full").unwrap().file_type().is_char_device());
 }
+
+#[test]
+fn a_pulse_too_fast_for_its_run_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = dir.path().join("pulse.yaml");
+    std::fs::write(&g, "simulation: { stop: 0.05 }\nblocks:\n  p: { type: pulse, period: 1e-300 }\n").unwrap();
+    let out = ctlgraph(&["check", path(&g)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("block `p`: events 5e-301 s apart give 1e299 steps"), "{}", text(&out.stderr));
+}

@@ -257,6 +257,10 @@ impl Block for Pulse {
         io.set(0, y);
     }
 
+    fn min_event_spacing(&self) -> f64 {
+        self.high.min(self.period - self.high)
+    }
+
     fn next_event(&self, t: f64) -> f64 {
         let k = self.index(t).max(0.0);
         let mut best = f64::INFINITY;

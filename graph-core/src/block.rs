@@ -319,6 +319,13 @@ pub trait Block: Send {
         f64::INFINITY
     }
 
+    /// The shortest time between two of the block's events (a pulse's high
+    /// or low phase), so that the compiler can refuse a graph whose events
+    /// could not all be stepped to before the stop time.
+    fn min_event_spacing(&self) -> f64 {
+        f64::INFINITY
+    }
+
     /// Number of zero-crossing functions (after `set_width`), fixed for the
     /// run. Only continuous-rate blocks are watched.
     fn num_zero_crossings(&self) -> usize {

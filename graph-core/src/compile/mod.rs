@@ -124,6 +124,19 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let order = sort(&nodes, &drivers)?;
     let (rates, clocks) = resolve_rates(&nodes, &drivers, &order);
     for (i, node) in nodes.iter().enumerate() {
+        let spacing = node.block.as_ref().map_or(f64::INFINITY, |b| b.min_event_spacing());
+        if g.sim.stop / spacing > crate::flatten::MAX_STEPS {
+            return Err(Diagnostic::at(
+                &node.flat.spec.pos,
+                format!(
+                    "block `{}`: events {spacing:e} s apart give {:e} steps before the stop time {} s (limit {:e})",
+                    node.flat.path,
+                    g.sim.stop / spacing,
+                    g.sim.stop,
+                    crate::flatten::MAX_STEPS
+                ),
+            ));
+        }
         if let Some(Rate::Discrete(c)) = rates.get(&i) {
             let period = clocks[*c].0;
             if g.sim.stop / period > crate::flatten::MAX_STEPS {

@@ -33,6 +33,12 @@ pub enum SimError {
         t: f64,
         error: SolverError,
     },
+    /// Time stopped advancing: a block asks for major steps closer together
+    /// than floating point can tell apart.
+    Stalled {
+        t: f64,
+        block: String,
+    },
     /// A block's zero crossings kept firing at (nearly) one instant: the
     /// model chatters (a Zeno or sliding behaviour).
     Chattering {
@@ -49,6 +55,11 @@ impl fmt::Display for SimError {
                 write!(f, "t = {t}: block `{block}`: {what} is {value}")
             }
             SimError::Solver { t, error } => write!(f, "t = {t}: solver: {error}"),
+            SimError::Stalled { t, block } => write!(
+                f,
+                "t = {t}: time does not advance: block `{block}` asks for steps closer than the time resolution \
+                 (a period or event spacing too small for the stop time)"
+            ),
             SimError::Chattering { t, block, what } => write!(
                 f,
                 "t = {t}: block `{block}` chatters: {what}; \
@@ -130,6 +141,8 @@ pub struct Simulator {
     /// Earliest block event after `t` (see [`Simulator::earliest_event`]).
     next_event: f64,
     major_steps: u64,
+    /// Major steps in a row at which time did not advance.
+    stalled: u32,
     /// Blocks evaluated in minor steps (continuous rate), execution order.
     continuous: Vec<usize>,
     /// Blocks with continuous states.
@@ -177,6 +190,7 @@ impl Simulator {
             first: true,
             next_event: f64::INFINITY,
             major_steps: 0,
+            stalled: 0,
             continuous,
             stateful,
             watch,
@@ -392,6 +406,17 @@ impl Simulator {
                 what: format!("state {}", k),
                 value: self.x[k],
             });
+        }
+        self.stalled = if self.t > t0 { 0 } else { self.stalled + 1 };
+        if self.stalled > 1000 {
+            let (i, _) = self
+                .model
+                .blocks
+                .iter()
+                .enumerate()
+                .map(|(i, b)| (i, b.next_event(t0)))
+                .fold((0, f64::INFINITY), |best, (i, e)| if e < best.1 { (i, e) } else { best });
+            return Err(SimError::Stalled { t: t0, block: self.model.meta[i].name.clone() });
         }
         self.major_steps += 1;
         Ok(())
