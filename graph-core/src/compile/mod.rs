@@ -8,7 +8,7 @@ mod wiring;
 
 use crate::block::{Block, Interface, Port, SampleTime, Width};
 use crate::diag::{Diagnostic, Pos};
-use crate::flatten::{FlatBlock, FlatGraph, SimConfig};
+use crate::flatten::{FlatBlock, FlatGraph, MAX_STEPS, SimConfig};
 use crate::registry::Registry;
 use schedule::{resolve_rates, sort};
 use std::collections::HashMap;
@@ -125,32 +125,12 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let (rates, clocks) = resolve_rates(&nodes, &drivers, &order);
     for (i, node) in nodes.iter().enumerate() {
         let spacing = node.block.as_ref().map_or(f64::INFINITY, |b| b.min_event_spacing());
-        if g.sim.stop / spacing > crate::flatten::MAX_STEPS {
-            return Err(Diagnostic::at(
-                &node.flat.spec.pos,
-                format!(
-                    "block `{}`: events {spacing:e} s apart give {:e} steps before the stop time {} s (limit {:e})",
-                    node.flat.path,
-                    g.sim.stop / spacing,
-                    g.sim.stop,
-                    crate::flatten::MAX_STEPS
-                ),
-            ));
-        }
+        refuse_too_many_steps(node, g.sim.stop, spacing, |n| format!("events {spacing:e} s apart give {n:e} steps"))?;
         if let Some(Rate::Discrete(c)) = rates.get(&i) {
             let period = clocks[*c].0;
-            if g.sim.stop / period > crate::flatten::MAX_STEPS {
-                return Err(Diagnostic::at(
-                    &node.flat.spec.pos,
-                    format!(
-                        "block `{}`: a sample time of {period:e} s gives {:e} hits before the stop time {} s (limit {:e})",
-                        node.flat.path,
-                        g.sim.stop / period,
-                        g.sim.stop,
-                        crate::flatten::MAX_STEPS
-                    ),
-                ));
-            }
+            refuse_too_many_steps(node, g.sim.stop, period, |n| {
+                format!("a sample time of {period:e} s gives {n:e} hits")
+            })?;
         }
     }
 
@@ -292,4 +272,23 @@ impl Model {
             })
         })
     }
+}
+
+/// Refuses a block whose events or sample hits, `interval` seconds apart,
+/// would need more than [`MAX_STEPS`] to reach the stop time (the run would
+/// never end in practice); `what` names them, given their count.
+fn refuse_too_many_steps(
+    node: &Node,
+    stop: f64,
+    interval: f64,
+    what: impl FnOnce(f64) -> String,
+) -> Result<(), Diagnostic> {
+    let steps = stop / interval;
+    if steps <= MAX_STEPS {
+        return Ok(());
+    }
+    Err(Diagnostic::at(
+        &node.flat.spec.pos,
+        format!("block `{}`: {} before the stop time {stop} s (limit {MAX_STEPS:e})", node.flat.path, what(steps)),
+    ))
 }
