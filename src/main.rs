@@ -385,7 +385,7 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
     result.map_err(|e| Failure::Run(e.to_string()))?;
     if let (Some(c), Some(path)) = (csv, opts.out) {
         c.commit().map_err(io_error(path))?;
-        if let Some(units) = ctlgraph::record::units_csv(&sim.model().columns) {
+        if let Some(units) = ctlgraph::record::units_csv(sim.model()) {
             let sidecar = ctlgraph::record::units_path(path);
             write_atomic(&sidecar, units.as_bytes()).map_err(io_error(&sidecar))?;
         }

@@ -7,9 +7,6 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// A CSV file written to a temporary name beside its destination and
-/// renamed into place by [`CsvFile::commit`]; dropped uncommitted, it
-/// leaves nothing behind.
 /// A number as CSV files show it: Rust's `Display` and `LowerExp` for f64
 /// print the shortest text that reads back to the same number, so values
 /// survive the round trip; very small or large magnitudes use the exponent
@@ -27,6 +24,9 @@ impl std::fmt::Display for Number {
     }
 }
 
+/// A CSV file written to a temporary name beside its destination and
+/// renamed into place by [`CsvFile::commit`]; dropped uncommitted, it
+/// leaves nothing behind.
 pub struct CsvFile {
     dest: PathBuf,
     tmp: PathBuf,
@@ -173,24 +173,13 @@ pub fn write_atomic(dest: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// The units of the recorded columns as a two-row CSV aligned with the
 /// data's header (`t,y,u` over `s,mm,V`; empty where a record has no
 /// unit), or `None` when no record has one.
-pub fn units_csv(columns: &[ctlgraph_core::compile::Column]) -> Option<String> {
-    if columns.iter().all(|c| c.unit.is_none()) {
+pub fn units_csv(model: &ctlgraph_core::Model) -> Option<String> {
+    if model.columns.iter().all(|c| c.unit.is_none()) {
         return None;
     }
-    let (mut names, mut units) = (vec!["t".to_string()], vec!["s".to_string()]);
-    for c in columns {
-        let unit = c.unit.clone().unwrap_or_default();
-        if c.width == 1 {
-            names.push(c.name.clone());
-            units.push(unit);
-        } else {
-            for k in 1..=c.width {
-                names.push(format!("{}[{k}]", c.name));
-                units.push(unit.clone());
-            }
-        }
-    }
-    Some(format!("{}\n{}\n", names.join(","), units.join(",")))
+    let units = std::iter::once("s")
+        .chain(model.columns.iter().flat_map(|c| std::iter::repeat_n(c.unit.as_deref().unwrap_or(""), c.width)));
+    Some(format!("{}\n{}\n", model.headers().join(","), units.collect::<Vec<_>>().join(",")))
 }
 
 /// Where the units of the CSV at `data` go: `run.csv` → `run.units.csv`.
