@@ -390,6 +390,46 @@ fn deep_input_is_refused_not_a_stack_overflow() {
 }
 
 #[test]
+fn an_include_chain_that_doubles_is_refused_before_it_expands() {
+    // Thirty files, each including the next twice: 2^30 blocks if expanded.
+    // The flattened size is known from the (cached) parse of each file, so
+    // the refusal comes at once and names where the chain starts.
+    let dir = tempfile::tempdir().unwrap();
+    for k in 0..30 {
+        let body = if k < 29 {
+            format!(
+                "blocks:\n  i: {{ type: inport }}\n  a: {{ type: subsystem, file: b{n}.yaml }}\n  \
+                 b: {{ type: subsystem, file: b{n}.yaml }}\n  s: {{ type: sum, signs: \"++\" }}\n  \
+                 o: {{ type: outport }}\nwires: [i -> a, i -> b, a -> s.in1, b -> s.in2, s -> o]\n",
+                n = k + 1
+            )
+        } else {
+            "blocks:\n  i: { type: inport }\n  o: { type: outport }\nwires: [i -> o]\n".to_string()
+        };
+        std::fs::write(dir.path().join(format!("b{k}.yaml")), body).unwrap();
+    }
+    let top = dir.path().join("top.yaml");
+    std::fs::write(
+        &top,
+        "blocks:\n  c: { type: constant }\n  s: { type: subsystem, file: b0.yaml }\nwires: [c -> s]\n",
+    )
+    .unwrap();
+    let d = ctlgraph::compile_file(&top, &[]).err().expect("refused");
+    assert!(d.message.contains("block `s` (subsystem)"), "{d}");
+    assert!(d.message.contains("expands to 2684354557 blocks, past the limit of 1000000"), "{d}");
+    assert!(d.to_string().contains("top.yaml:3:"), "{d}");
+    // Level k holds three blocks and two copies of level k + 1, the last one
+    // two blocks: 5·2^(29−k) − 3 in all. Nineteen levels are refused too.
+    std::fs::write(
+        &top,
+        "blocks:\n  c: { type: constant }\n  s: { type: subsystem, file: b11.yaml }\nwires: [c -> s]\n",
+    )
+    .unwrap();
+    let d = ctlgraph::compile_file(&top, &[]).err().expect("refused");
+    assert!(d.message.contains("expands to 1310717 blocks"), "{d}");
+}
+
+#[test]
 fn size_parameters_have_stated_limits() {
     let rls = "blocks:\n  u: { type: step }\n  r: { type: rls, n: 100000 }\nwires: [u -> r.phi, u -> r.y]\n";
     let d = error(rls);

@@ -138,8 +138,8 @@ pub fn load_str(text: &str, file: Arc<str>, overrides: &[(String, String)]) -> R
         }
     };
     out.scopes = graph.scopes.iter().map(|s| s.evaluate(&number)).collect::<Result<_, _>>()?;
-    let mut stack = vec![canonical(Path::new(&*file))];
-    expand(&graph, "", scope, dir, &mut out, &mut stack)?;
+    let mut includes = Includes { stack: vec![canonical(Path::new(&*file))], ..Includes::default() };
+    expand(&graph, "", scope, dir, &mut out, &mut includes)?;
     out.records = graph.record.clone();
     Ok(out)
 }
@@ -371,7 +371,7 @@ fn expand(
     scope: Arc<Vec<(String, f64)>>,
     dir: Arc<PathBuf>,
     out: &mut FlatGraph,
-    stack: &mut Vec<PathBuf>,
+    includes: &mut Includes,
 ) -> Result<(), Diagnostic> {
     let mut subs: HashMap<&str, (Vec<String>, Vec<String>)> = HashMap::new();
     for b in &g.blocks {
@@ -387,7 +387,7 @@ fn expand(
             out.blocks.push(FlatBlock { path, spec: b.clone(), scope: scope.clone(), dir: dir.clone() });
             continue;
         }
-        let inner = load_subsystem(b, &path, &scope, &dir, out, stack)?;
+        let inner = load_subsystem(b, &path, &scope, &dir, out, includes)?;
         subs.insert(&b.name, inner.clone());
         out.subsystems.insert(path, inner);
     }
@@ -437,7 +437,7 @@ fn load_subsystem(
     scope: &[(String, f64)],
     dir: &Path,
     out: &mut FlatGraph,
-    stack: &mut Vec<PathBuf>,
+    includes: &mut Includes,
 ) -> Result<(Vec<String>, Vec<String>), Diagnostic> {
     let what = format!("block `{path}` (subsystem)");
     check_keys(&b.params, &SUBSYSTEM_KEYS, &what)?;
@@ -448,13 +448,23 @@ fn load_subsystem(
     let rel = file_v.expect_str(&format!("{what}: `file`"))?;
     let sub_path = dir.join(rel);
     let sub_file: Arc<str> = sub_path.display().to_string().into();
-    let text = std::fs::read_to_string(&sub_path)
-        .map_err(|e| Diagnostic::at(&file_v.pos, format!("{what}: cannot read `{sub_file}`: {e}")))?;
     let canon = canonical(&sub_path);
-    if stack.contains(&canon) {
+    if includes.stack.contains(&canon) {
         return Err(Diagnostic::at(&file_v.pos, format!("{what}: `{sub_file}` includes itself")));
     }
-    let sub = GraphFile::parse(&text, sub_file.clone())?;
+    let sub = includes.parse(&sub_path, &canon).map_err(|e| match e {
+        IncludeError::Read(e) => Diagnostic::at(&file_v.pos, format!("{what}: cannot read `{sub_file}`: {e}")),
+        IncludeError::Parse(d) => d,
+    })?;
+    if let Some(n) = includes.expanded_size(&sub, &canon, &sub_path)
+        && out.blocks.len() + n > MAX_BLOCKS
+    {
+        return Err(Diagnostic::at(
+            &b.pos,
+            format!("{what}: `{sub_file}` expands to {n} blocks, past the limit of {MAX_BLOCKS} for the whole graph"),
+        )
+        .with_hint("subsystems included many times over multiply: look for an include chain that doubles"));
+    }
     let known: Vec<&str> = sub.parameters.iter().map(|(k, _)| k.name.as_str()).collect();
     let mut overrides = Vec::new();
     if let Some(p) = yaml::lookup(&b.params, "parameters") {
@@ -475,13 +485,85 @@ fn load_subsystem(
     }
     let sub_scope = Arc::new(eval_parameters(&sub.parameters, &overrides)?);
     let sub_dir = Arc::new(sub_path.parent().map(Path::to_path_buf).unwrap_or_default());
-    if stack.len() >= MAX_DEPTH {
+    if includes.stack.len() >= MAX_DEPTH {
         return Err(Diagnostic::at(&b.pos, format!("{what}: subsystems nested too deeply (limit {MAX_DEPTH})")));
     }
-    stack.push(canon);
-    expand(&sub, &format!("{path}/"), sub_scope, sub_dir, out, stack)?;
-    stack.pop();
+    includes.stack.push(canon);
+    expand(&sub, &format!("{path}/"), sub_scope, sub_dir, out, includes)?;
+    includes.stack.pop();
     Ok(sub_ports(&sub))
+}
+
+/// The subsystem files met while expanding: each is read and parsed once,
+/// and its flattened size is known before it is expanded, so an include
+/// chain that doubles at every level is refused at once rather than after
+/// building a million blocks.
+#[derive(Default)]
+struct Includes {
+    /// The chain of files being expanded (canonical paths), for cycles.
+    stack: Vec<PathBuf>,
+    parsed: HashMap<PathBuf, Arc<GraphFile>>,
+    /// Flattened block count per file (saturating).
+    sizes: HashMap<PathBuf, usize>,
+}
+
+enum IncludeError {
+    Read(std::io::Error),
+    Parse(Diagnostic),
+}
+
+impl Includes {
+    fn parse(&mut self, path: &Path, canon: &Path) -> Result<Arc<GraphFile>, IncludeError> {
+        if let Some(g) = self.parsed.get(canon) {
+            return Ok(g.clone());
+        }
+        let text = std::fs::read_to_string(path).map_err(IncludeError::Read)?;
+        let g = Arc::new(GraphFile::parse(&text, path.display().to_string().into()).map_err(IncludeError::Parse)?);
+        self.parsed.insert(canon.to_path_buf(), g.clone());
+        Ok(g)
+    }
+
+    /// How many blocks `g` (the file at `path`) flattens to; `None` when an
+    /// include below it cannot be read, parsed or is cyclic or too deep —
+    /// expanding it then reports that error at its position.
+    fn expanded_size(&mut self, g: &GraphFile, canon: &Path, path: &Path) -> Option<usize> {
+        if let Some(&n) = self.sizes.get(canon) {
+            return Some(n);
+        }
+        if self.stack.len() >= MAX_DEPTH || self.stack.iter().any(|p| p == canon) {
+            return None;
+        }
+        self.stack.push(canon.to_path_buf());
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let mut total = 0usize;
+        for b in &g.blocks {
+            let n = if b.type_name == SUBSYSTEM {
+                let rel = yaml::lookup(&b.params, "file").and_then(|v| match &v.kind {
+                    Kind::Str(s) => Some(s.clone()),
+                    _ => None,
+                });
+                let sub = rel.and_then(|rel| {
+                    let p = dir.join(rel);
+                    let c = canonical(&p);
+                    let sub = self.parse(&p, &c).ok()?;
+                    self.expanded_size(&sub, &c, &p)
+                });
+                match sub {
+                    Some(n) => n,
+                    None => {
+                        self.stack.pop();
+                        return None;
+                    }
+                }
+            } else {
+                1
+            };
+            total = total.saturating_add(n);
+        }
+        self.stack.pop();
+        self.sizes.insert(canon.to_path_buf(), total);
+        Some(total)
+    }
 }
 
 /// Splits a command-line `NAME=VALUE`.
