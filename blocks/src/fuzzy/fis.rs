@@ -3,6 +3,8 @@
 //! inputs (output membership values on the sampled universe) is computed
 //! once; `eval` writes into preallocated buffers and allocates nothing.
 
+use std::ops::Range;
+
 /// A membership function (parameter order as MATLAB's).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Mf {
@@ -170,13 +172,28 @@ pub struct Fis {
     pub rules: Vec<Rule>,
     pub methods: Methods,
     pub sugeno: bool,
-    /// Per output: the sampled universe, and each term's membership on it.
+    /// Per output: the sampled universe, each term's membership on it and
+    /// the index range where that is nonzero, and the weights that make the
+    /// centroid's moment and area dot products.
     grids: Vec<Vec<f64>>,
     term_grids: Vec<Vec<Vec<f64>>>,
+    supports: Vec<Vec<Range<usize>>>,
+    centroid_weights: Vec<(Vec<f64>, Vec<f64>)>,
+    /// Where each input's term memberships start in `membership`.
+    offsets: Vec<usize>,
+    /// Rules that fire only when one given membership is nonzero (an AND
+    /// of plain antecedents: any zero makes the product or minimum zero),
+    /// by that membership's index; and the rules always evaluated.
+    sparse: Vec<Vec<usize>>,
+    dense: Vec<usize>,
     // Work buffers.
-    membership: Vec<Vec<f64>>,
-    strength: Vec<f64>,
+    membership: Vec<f64>,
+    /// (rule, strength) of the rules with nonzero strength this call: the
+    /// first `n_fired` entries.
+    fired: Vec<(usize, f64)>,
+    n_fired: usize,
     term_strength: Vec<f64>,
+    /// Zero between calls (each call clears the range it wrote).
     aggregate: Vec<f64>,
 }
 
@@ -193,17 +210,41 @@ impl Fis {
             .iter()
             .map(|v| (0..m).map(|j| v.lo + (v.hi - v.lo) * j as f64 / (m - 1) as f64).collect())
             .collect();
-        let term_grids = outputs
+        let term_grids: Vec<Vec<Vec<f64>>> = outputs
             .iter()
             .zip(&grids)
             .map(|(v, g)| v.terms.iter().map(|(_, mf)| g.iter().map(|&x| mf.eval(x)).collect()).collect())
             .collect();
+        let supports =
+            term_grids.iter().map(|terms: &Vec<Vec<f64>>| terms.iter().map(|mu| support(mu)).collect()).collect();
+        let offsets: Vec<usize> = inputs
+            .iter()
+            .scan(0, |next, v| {
+                let at = *next;
+                *next += v.terms.len();
+                Some(at)
+            })
+            .collect();
+        let n_memberships = inputs.iter().map(|v| v.terms.len()).sum();
+        let (mut sparse, mut dense) = (vec![Vec::new(); n_memberships], Vec::new());
+        for (r, rule) in rules.iter().enumerate() {
+            let key = rule.antecedents.iter().find(|a| !a.2).filter(|_| rule.connective == Connective::And);
+            match key {
+                Some(&(i, k, _)) => sparse[offsets[i] + k].push(r),
+                None => dense.push(r),
+            }
+        }
         let most_terms = outputs.iter().map(|v| v.terms.len()).max().unwrap_or(0);
         Fis {
-            membership: inputs.iter().map(|v| vec![0.0; v.terms.len()]).collect(),
-            strength: vec![0.0; rules.len()],
+            membership: vec![0.0; n_memberships],
+            fired: vec![(0, 0.0); rules.len()],
+            n_fired: 0,
             term_strength: vec![0.0; most_terms],
             aggregate: vec![0.0; m],
+            centroid_weights: grids.iter().map(|g| centroid_weights(g)).collect(),
+            offsets,
+            sparse,
+            dense,
             inputs,
             outputs,
             rules,
@@ -211,6 +252,7 @@ impl Fis {
             sugeno,
             grids,
             term_grids,
+            supports,
         }
     }
 
@@ -219,99 +261,179 @@ impl Fis {
         for (i, v) in self.inputs.iter().enumerate() {
             let xi = x[i].clamp(v.lo, v.hi);
             for (k, (_, mf)) in v.terms.iter().enumerate() {
-                self.membership[i][k] = mf.eval(xi);
+                self.membership[self.offsets[i] + k] = mf.eval(xi);
             }
         }
-        for (r, rule) in self.rules.iter().enumerate() {
-            let mut acc: Option<f64> = None;
-            for &(i, k, negated) in &rule.antecedents {
-                let mu = if negated { 1.0 - self.membership[i][k] } else { self.membership[i][k] };
-                acc = Some(match (acc, rule.connective) {
-                    (None, _) => mu,
-                    (Some(a), Connective::And) => match self.methods.and {
-                        AndMethod::Min => a.min(mu),
-                        AndMethod::Product => a * mu,
-                    },
-                    (Some(a), Connective::Or) => match self.methods.or {
-                        OrMethod::Max => a.max(mu),
-                        OrMethod::ProbOr => a + mu - a * mu,
-                    },
-                });
-            }
-            self.strength[r] = acc.unwrap_or(0.0);
+        // Which rules fire follows no pattern a branch predictor could
+        // learn: every candidate is written, and the count moves only for
+        // those with nonzero strength.
+        let mut n = 0;
+        let candidates = self.membership.iter().zip(&self.sparse).filter(|&(&m, _)| m > 0.0).flat_map(|(_, r)| r);
+        for &r in candidates.chain(&self.dense) {
+            let s = self.strength(&self.rules[r]);
+            self.fired[n] = (r, s);
+            n += usize::from(s > 0.0);
         }
+        self.n_fired = n;
         for (o, yo) in y.iter_mut().enumerate().take(self.outputs.len()) {
             *yo = if self.sugeno { self.sugeno_output(o) } else { self.mamdani_output(o) };
         }
     }
 
+    /// The firing strength of `rule` at the current memberships.
+    fn strength(&self, rule: &Rule) -> f64 {
+        let mu = |&(i, k, negated): &(usize, usize, bool)| {
+            let m = self.membership[self.offsets[i] + k];
+            if negated { 1.0 - m } else { m }
+        };
+        let mut terms = rule.antecedents.iter().map(mu);
+        let first = terms.next().unwrap_or(0.0);
+        match (rule.connective, self.methods.and, self.methods.or) {
+            (Connective::And, AndMethod::Min, _) => terms.fold(first, f64::min),
+            (Connective::And, AndMethod::Product, _) => terms.fold(first, |a, m| a * m),
+            (Connective::Or, _, OrMethod::Max) => terms.fold(first, f64::max),
+            (Connective::Or, _, OrMethod::ProbOr) => terms.fold(first, |a, m| a + m - a * m),
+        }
+    }
+
+    /// The (term, strength) conclusions of the fired rules on output `o`.
+    fn conclusions(fired: &[(usize, f64)], rules: &[Rule], o: usize) -> impl Iterator<Item = (usize, f64)> {
+        fired
+            .iter()
+            .flat_map(move |&(r, s)| rules[r].consequents.iter().filter(move |c| c.0 == o).map(move |&(_, t)| (t, s)))
+    }
+
     /// Weighted average of the consequents' constants.
     fn sugeno_output(&self, o: usize) -> f64 {
         let (mut num, mut den) = (0.0, 0.0);
-        for (r, rule) in self.rules.iter().enumerate() {
-            for &(out, term) in &rule.consequents {
-                if out == o {
-                    let z = match self.outputs[o].terms[term].1 {
-                        Mf::Const(z) => z,
-                        _ => 0.0,
-                    };
-                    num += self.strength[r] * z;
-                    den += self.strength[r];
-                }
-            }
+        for (term, s) in Self::conclusions(&self.fired[..self.n_fired], &self.rules, o) {
+            let z = match self.outputs[o].terms[term].1 {
+                Mf::Const(z) => z,
+                _ => 0.0,
+            };
+            num += s * z;
+            den += s;
         }
         if den > 0.0 { num / den } else { (self.outputs[o].lo + self.outputs[o].hi) / 2.0 }
     }
 
+    /// Aggregates the implied output sets on the grid, then defuzzifies.
+    /// Per term T, max_r imp(w_r, μ_T) = imp(max_r w_r, μ_T) over the rules
+    /// concluding T (implication is monotone) and Σ_r w_r·μ_T = (Σ_r w_r)·μ_T,
+    /// so the grid is visited once per firing term, not once per rule; only
+    /// sum aggregation of min implication needs the rules one by one.
     fn mamdani_output(&mut self, o: usize) -> f64 {
-        let Fis { rules, strength, term_strength, aggregate, term_grids, grids, methods, outputs, .. } = self;
-        let terms = &term_grids[o];
-        aggregate.iter_mut().for_each(|a| *a = 0.0);
-        let grouped = !(methods.aggregation == Aggregation::Sum && methods.implication == Implication::Min);
-        if grouped {
-            // max_r imp(w_r, μ_T) = imp(max_r w_r, μ_T) for rules sharing a
-            // term T (implication is monotone); Σ_r w_r·μ_T = (Σ_r w_r)·μ_T.
+        let Fis { fired, n_fired, rules, term_strength, aggregate, term_grids, supports, methods, .. } = self;
+        let (terms, supports, fired) = (&term_grids[o], &supports[o], &fired[..*n_fired]);
+        let (imp, agg) = (methods.implication, methods.aggregation);
+        // The implied sets are zero outside their term's support: only the
+        // union of the firing terms' supports is written and read.
+        let mut touched = usize::MAX..0;
+        let mut apply = |t: usize, w: f64| {
+            let s = supports[t].clone();
+            touched = touched.start.min(s.start)..touched.end.max(s.end);
+            imply_and_aggregate(&mut aggregate[s.clone()], &terms[t][s], w, imp, agg);
+        };
+        if !(agg == Aggregation::Sum && imp == Implication::Min) {
             term_strength[..terms.len()].iter_mut().for_each(|w| *w = 0.0);
-            for (r, rule) in rules.iter().enumerate() {
-                for &(out, t) in &rule.consequents {
-                    if out == o {
-                        term_strength[t] = match methods.aggregation {
-                            Aggregation::Max => term_strength[t].max(strength[r]),
-                            Aggregation::Sum => term_strength[t] + strength[r],
-                        };
-                    }
-                }
+            for (t, s) in Self::conclusions(fired, rules, o) {
+                term_strength[t] = match agg {
+                    Aggregation::Max => term_strength[t].max(s),
+                    Aggregation::Sum => term_strength[t] + s,
+                };
             }
-            for (t, mu) in terms.iter().enumerate() {
-                let w = term_strength[t];
-                if w == 0.0 {
-                    continue;
-                }
-                for (a, &m) in aggregate.iter_mut().zip(mu) {
-                    let v = match methods.implication {
-                        Implication::Min => w.min(m),
-                        Implication::Product => w * m,
-                    };
-                    *a = match methods.aggregation {
-                        Aggregation::Max => a.max(v),
-                        Aggregation::Sum => *a + v,
-                    };
+            for (t, &w) in term_strength[..terms.len()].iter().enumerate() {
+                if w > 0.0 {
+                    apply(t, w);
                 }
             }
         } else {
-            for (r, rule) in rules.iter().enumerate() {
-                for &(out, t) in &rule.consequents {
-                    if out == o && strength[r] > 0.0 {
-                        for (a, &m) in aggregate.iter_mut().zip(&terms[t]) {
-                            *a += strength[r].min(m);
-                        }
-                    }
-                }
+            for (t, s) in Self::conclusions(fired, rules, o) {
+                apply(t, s);
             }
         }
-        let v = &outputs[o];
-        defuzzify(&grids[o], aggregate, methods.defuzzification).unwrap_or((v.lo + v.hi) / 2.0)
+        let v = &self.outputs[o];
+        let midpoint = (v.lo + v.hi) / 2.0;
+        if touched.is_empty() {
+            return midpoint;
+        }
+        let y = if methods.defuzzification == Defuzzification::Centroid {
+            let (moment, area) = &self.centroid_weights[o];
+            let r = touched.clone();
+            let (m, total) = moment_and_area(&moment[r.clone()], &area[r.clone()], &aggregate[r]);
+            if total > 0.0 { m / total } else { midpoint }
+        } else {
+            defuzzify(&self.grids[o], aggregate, methods.defuzzification).unwrap_or(midpoint)
+        };
+        aggregate[touched].iter_mut().for_each(|a| *a = 0.0);
+        y
     }
+}
+
+/// The index range outside which `mu` is zero (empty when it is zero
+/// everywhere).
+fn support(mu: &[f64]) -> Range<usize> {
+    match (mu.iter().position(|&m| m != 0.0), mu.iter().rposition(|&m| m != 0.0)) {
+        (Some(first), Some(last)) => first..last + 1,
+        _ => 0..0,
+    }
+}
+
+/// `aggregate ← agg(aggregate, imp(w, μ))` pointwise, written with plain
+/// comparisons (no NaN handling: memberships are finite) so the loop
+/// compiles to packed min/max.
+fn imply_and_aggregate(aggregate: &mut [f64], mu: &[f64], w: f64, imp: Implication, agg: Aggregation) {
+    let pairs = aggregate.iter_mut().zip(mu);
+    match (imp, agg) {
+        (Implication::Min, Aggregation::Max) => pairs.for_each(|(a, &m)| {
+            let v = if w < m { w } else { m };
+            *a = if v > *a { v } else { *a };
+        }),
+        (Implication::Product, Aggregation::Max) => pairs.for_each(|(a, &m)| {
+            let v = w * m;
+            *a = if v > *a { v } else { *a };
+        }),
+        (Implication::Min, Aggregation::Sum) => pairs.for_each(|(a, &m)| *a += if w < m { w } else { m }),
+        (Implication::Product, Aggregation::Sum) => pairs.for_each(|(a, &m)| *a += w * m),
+    }
+}
+
+/// The centroid of a piecewise-linear μ sampled at `x` is moment/area with
+/// both linear in the samples: per segment, area = dx·(μ1 + μ2)/2 and
+/// moment = dx/2·[(μ1 + μ2)·x1 + dx·(μ1 + 2μ2)/3] (scikit-fuzzy's
+/// trapezoids). Returns the weights (moment, area) per sample.
+fn centroid_weights(x: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let (mut moment, mut area) = (vec![0.0; x.len()], vec![0.0; x.len()]);
+    for j in 0..x.len().saturating_sub(1) {
+        let dx = x[j + 1] - x[j];
+        area[j] += 0.5 * dx;
+        area[j + 1] += 0.5 * dx;
+        moment[j] += 0.5 * dx * (x[j] + dx / 3.0);
+        moment[j + 1] += 0.5 * dx * (x[j] + 2.0 * dx / 3.0);
+    }
+    (moment, area)
+}
+
+/// (Σ moment·μ, Σ area·μ) in one pass, with four running sums each so
+/// the loop vectorises.
+fn moment_and_area(moment: &[f64], area: &[f64], mu: &[f64]) -> (f64, f64) {
+    let (mut m4, mut a4) = ([0.0f64; 4], [0.0f64; 4]);
+    let n = mu.len().min(moment.len()).min(area.len());
+    let whole = n - n % 4;
+    for ((mc, ac), uc) in
+        moment[..whole].chunks_exact(4).zip(area[..whole].chunks_exact(4)).zip(mu[..whole].chunks_exact(4))
+    {
+        for k in 0..4 {
+            m4[k] += mc[k] * uc[k];
+            a4[k] += ac[k] * uc[k];
+        }
+    }
+    let (mut m, mut a) = ((m4[0] + m4[1]) + (m4[2] + m4[3]), (a4[0] + a4[1]) + (a4[2] + a4[3]));
+    for j in whole..n {
+        m += moment[j] * mu[j];
+        a += area[j] * mu[j];
+    }
+    (m, a)
 }
 
 /// Defuzzifies a sampled membership function; `None` when it is zero
