@@ -328,10 +328,10 @@ impl Fis {
         let (imp, agg) = (methods.implication, methods.aggregation);
         // The implied sets are zero outside their term's support: only the
         // union of the firing terms' supports is written and read.
-        let mut touched = usize::MAX..0;
+        let (mut from, mut to) = (usize::MAX, 0);
         let mut apply = |t: usize, w: f64| {
             let s = supports[t].clone();
-            touched = touched.start.min(s.start)..touched.end.max(s.end);
+            (from, to) = (from.min(s.start), to.max(s.end));
             imply_and_aggregate(&mut aggregate[s.clone()], &terms[t][s], w, imp, agg);
         };
         if !(agg == Aggregation::Sum && imp == Implication::Min) {
@@ -354,9 +354,10 @@ impl Fis {
         }
         let v = &self.outputs[o];
         let midpoint = (v.lo + v.hi) / 2.0;
-        if touched.is_empty() {
+        if from >= to {
             return midpoint;
         }
+        let touched = from..to;
         let y = if methods.defuzzification == Defuzzification::Centroid {
             let (moment, area) = &self.centroid_weights[o];
             let r = touched.clone();
