@@ -144,19 +144,18 @@ impl Fuzzy {
         }
         // Four running sums each, so the dot products vectorise.
         let (mut moment, mut area) = ([0.0f64; 4], [0.0f64; 4]);
-        let chunks = (to - from) / 4;
-        for g in 0..chunks {
+        let (m, a, u) = (&self.moment[from..to], &self.area[from..to], &mu[from..to]);
+        let (mc, ac, uc) = (m.chunks_exact(4), a.chunks_exact(4), u.chunks_exact(4));
+        let tail = mc.remainder().iter().zip(ac.remainder()).zip(uc.remainder());
+        let (tail_m, tail_a) = tail.fold((0.0, 0.0), |(sm, sa), ((m, a), u)| (sm + m * u, sa + a * u));
+        for ((m, a), u) in mc.zip(ac).zip(uc) {
             for k in 0..4 {
-                let j = from + 4 * g + k;
-                moment[k] += self.moment[j] * mu[j];
-                area[k] += self.area[j] * mu[j];
+                moment[k] += m[k] * u[k];
+                area[k] += a[k] * u[k];
             }
         }
-        let (mut moment, mut area) = (moment.iter().sum::<f64>(), area.iter().sum::<f64>());
-        for j in from + 4 * chunks..to {
-            moment += self.moment[j] * mu[j];
-            area += self.area[j] * mu[j];
-        }
+        let moment = moment.iter().sum::<f64>() + tail_m;
+        let area = area.iter().sum::<f64>() + tail_a;
         moment / area
     }
 }
