@@ -251,7 +251,7 @@ fn bench(c: &mut Criterion) {
         let (by_graph, _) = graph(&mut simulator(file, &[("noise_power", "0")]));
         let (by_hand, _) = hand_written(f, 0.0, zoh);
         let rel = (by_graph - by_hand).abs() / by_hand.abs();
-        assert!(rel < 1e-6, "{file}: graph Σy = {by_graph} vs hand {by_hand}");
+        assert!(rel < 1e-12, "{file}: graph Σy = {by_graph} vs hand {by_hand}");
     }
     let sigma = (1.44e-5f64 / 0.004).sqrt();
     let mut group = c.benchmark_group("fladrc_scenario_20k_samples");

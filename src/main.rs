@@ -201,11 +201,14 @@ fn check(graph: &Path, sets: &[String]) -> Result<(), Failure> {
     println!("execution order:");
     let width = model.meta.iter().map(|m| m.name.len()).max().unwrap_or(0);
     for (i, m) in model.meta.iter().enumerate() {
-        println!("  {:>3}  {:<width$}  {:<26}  {}", i + 1, m.name, m.type_name, m.sample_time);
+        let zoh = if m.exact_zoh { format!(", exact ZOH at {}", model.sim.method.max_step()) } else { String::new() };
+        println!("  {:>3}  {:<width$}  {:<26}  {}{zoh}", i + 1, m.name, m.type_name, m.sample_time);
     }
     let solver = model.sim.method;
+    let held = model.n_states - model.integrated_states();
+    let held = if held > 0 { format!(" ({held} stepped by exact ZOH)") } else { String::new() };
     println!(
-        "{} blocks, {} continuous states, {} signal values, {} sample rate(s); solver {}, stop {} s",
+        "{} blocks, {} continuous states{held}, {} signal values, {} sample rate(s); solver {}, stop {} s",
         model.meta.len(),
         model.n_states,
         model.signal_len,
@@ -376,6 +379,7 @@ fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
             warnings: sim.warnings(),
             checks: &results,
             columns: &sim.model().columns,
+            blocks: &sim.model().meta,
             parameters: &sim.model().parameters,
             overrides: &sets,
         };

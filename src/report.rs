@@ -20,6 +20,8 @@ pub struct RunInfo<'a> {
     pub warnings: &'a [String],
     pub checks: &'a [CheckResult],
     pub columns: &'a [ctlgraph_core::compile::Column],
+    /// The compiled blocks (for which were stepped by exact ZOH).
+    pub blocks: &'a [ctlgraph_core::compile::BlockMeta],
     /// The graph's parameters as resolved for this run.
     pub parameters: &'a [(String, f64)],
     /// The `--set` overrides as given.
@@ -53,6 +55,9 @@ pub fn to_json(info: &RunInfo) -> Value {
         "overrides": info.overrides.iter().map(|(n, v)| json!({ "name": n, "value": v })).collect::<Vec<_>>(),
         "parameters": info.parameters.iter().map(|(n, v)| json!({ "name": n, "value": v })).collect::<Vec<_>>(),
         "solver": solver_json(info.method),
+        // Continuous LTI blocks advanced by their exact zero-order-hold
+        // transition instead of being integrated (`solver.exact_lti`).
+        "exact_zoh": info.blocks.iter().filter(|b| b.exact_zoh).map(|b| b.name.as_str()).collect::<Vec<_>>(),
         "statistics": {
             "major_steps": s.major_steps,
             "solver_steps": s.solver.steps,

@@ -31,9 +31,19 @@ fn first_order_step_response_dopri5() {
 
 #[test]
 fn euler_is_visibly_worse_than_rk4() {
-    let trace = run(&first_order("{ method: euler, step: 1.0e-2 }"));
+    let trace = run(&first_order("{ method: euler, step: 1.0e-2, exact_lti: false }"));
     let err = max_error(&trace, "y", |t| 1.0 - (-t / 0.5).exp());
     assert!(err > 1e-3 && err < 1e-2, "euler error {err}");
+}
+
+#[test]
+fn an_lti_block_driven_by_a_step_is_exact_whatever_the_fixed_step_method() {
+    // Exact ZOH replaces integration: Euler's coarse step is as exact as RK4's.
+    for method in ["euler", "rk4"] {
+        let trace = run(&first_order(&format!("{{ method: {method}, step: 1.0e-2 }}")));
+        let err = max_error(&trace, "y", |t| 1.0 - (-t / 0.5).exp());
+        assert!(err < 1e-14, "{method}: error {err}");
+    }
 }
 
 #[test]

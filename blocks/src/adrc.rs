@@ -330,7 +330,8 @@ fn build_lsef(p: &mut Params) -> Result<Built, Diagnostic> {
     }
     let b0 = p.number_where("b0", None, |v| v != 0.0 && v.is_finite(), "a nonzero input gain")?;
     let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
-    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).input("r1", Width::Fixed(1), true);
+    let mut iface =
+        Interface::new(p.sample_time(SampleTime::Inherited)?).piecewise_constant().input("r1", Width::Fixed(1), true);
     if order == 2 {
         iface = iface.input("r2", Width::Fixed(1), true);
     }

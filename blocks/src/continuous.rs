@@ -168,6 +168,9 @@ impl Block for Lti {
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
         self.ss.derivative(io.x, io.input(0), dx);
     }
+    fn lti(&self) -> Option<&StateSpace> {
+        Some(&self.ss)
+    }
 }
 
 /// Maps realisation errors onto the parameter they concern.

@@ -150,6 +150,7 @@ fn build_relay(p: &mut Params) -> Result<Built, Diagnostic> {
     let off_value = p.number_or("off_value", 0.0)?;
     let initial_on = p.choice("initial", &["off", "on"])? == "on";
     let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        .piecewise_constant()
         .input("u", Width::Fixed(1), true)
         .output("y", Width::Fixed(1));
     Ok(Built::new(Relay::new(on, off, on_value, off_value, initial_on), iface))
@@ -218,6 +219,7 @@ fn build_hit_crossing(p: &mut Params) -> Result<Built, Diagnostic> {
         _ => Trigger::Either,
     };
     let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        .piecewise_constant()
         .input("u", Width::Fixed(1), true)
         .output("y", Width::Fixed(1));
     let block = HitCrossing { level, trigger, last: f64::NAN, current: f64::NAN, hit: 0.0, located: false };

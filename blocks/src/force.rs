@@ -281,6 +281,7 @@ fn build_normal_force(p: &mut Params) -> Result<Built, Diagnostic> {
     let mu_d = p.number_where("mu_d", Some(mu_u), |v| (0.0..1.0).contains(&v), "in [0, 1)")?;
     let by_slope = p.choice("select", &["climbing", "slope"])? == "slope";
     let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        .piecewise_constant()
         .input("fx", Width::Fixed(1), true)
         .input("fz", Width::Fixed(1), true)
         .input(if by_slope { "slope" } else { "climbing" }, Width::Fixed(1), true)

@@ -127,7 +127,7 @@ fn port_names(n: usize) -> Vec<String> {
 
 /// An elementwise block over n inputs of common width.
 fn nary(p: &mut Params, n: usize, block: impl Block + 'static) -> Result<Built, Diagnostic> {
-    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?);
+    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).piecewise_constant();
     for name in port_names(n) {
         iface = iface.input(&name, Width::Common, true);
     }
@@ -213,14 +213,17 @@ fn build_gain(p: &mut Params) -> Result<Built, Diagnostic> {
         if cols == 0 || rows.iter().any(|r| r.len() != cols) {
             return Err(p.error("k", "matrix rows must all have the same, nonzero length"));
         }
-        let iface = Interface::new(st).input("u", Width::Fixed(cols), true).output("y", Width::Fixed(rows.len()));
+        let iface = Interface::new(st)
+            .piecewise_constant()
+            .input("u", Width::Fixed(cols), true)
+            .output("y", Width::Fixed(rows.len()));
         return Ok(Built::new(Gain::Matrix { k: rows.concat(), cols }, iface));
     }
     let k = p.opt_vector("k")?.unwrap_or_else(|| vec![1.0]);
     if k.is_empty() {
         return Err(p.error("k", "needs at least one number"));
     }
-    let iface = Interface::new(st).input("u", Width::Common, true).output("y", Width::Common);
+    let iface = Interface::new(st).piecewise_constant().input("u", Width::Common, true).output("y", Width::Common);
     Ok(Built::new(Gain::Elementwise(k), iface))
 }
 
@@ -259,6 +262,7 @@ fn build_sum(p: &mut Params) -> Result<Built, Diagnostic> {
     }
     if signs.len() == 1 {
         let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+            .piecewise_constant()
             .input("u1", Width::Common, true)
             .output("y", Width::Fixed(1));
         return Ok(Built::new(Sum { signs }, iface));
@@ -369,6 +373,7 @@ fn build_extremum(p: &mut Params, max: bool) -> Result<Built, Diagnostic> {
     let inputs = p.count_or("inputs", 2, 10_000)?;
     if inputs == 1 {
         let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+            .piecewise_constant()
             .input("u1", Width::Common, true)
             .output("y", Width::Fixed(1));
         return Ok(Built::new(Extremum { max, inputs, selected: Vec::new() }, iface));
@@ -440,6 +445,9 @@ fn build_fcn(p: &mut Params) -> Result<Built, Diagnostic> {
     let reads_time = expr.uses_slot(n);
     let default = if reads_time { SampleTime::Continuous } else { SampleTime::Inherited };
     let mut iface = Interface::new(p.sample_time(default)?);
+    if !reads_time {
+        iface = iface.piecewise_constant();
+    }
     for name in &names {
         iface = iface.input(name, Width::Fixed(1), true);
     }

@@ -96,6 +96,7 @@ impl Piecewise {
     /// Builds the block with one input `u` and output `y` of any width.
     pub fn build(self, p: &mut Params) -> Result<Built, Diagnostic> {
         let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+            .piecewise_constant()
             .input("u", Width::Common, true)
             .output("y", Width::Common);
         Ok(Built::new(self, iface))

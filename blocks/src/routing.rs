@@ -145,7 +145,7 @@ impl Block for Concat {
 
 fn build_mux(p: &mut Params) -> Result<Built, Diagnostic> {
     let ws = widths(p, "inputs")?;
-    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?);
+    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).piecewise_constant();
     for (i, w) in ws.iter().enumerate() {
         iface = iface.input(&format!("u{}", i + 1), Width::Fixed(*w), true);
     }
@@ -169,8 +169,11 @@ impl Block for Split {
 
 fn build_demux(p: &mut Params) -> Result<Built, Diagnostic> {
     let ws = widths(p, "outputs")?;
-    let mut iface =
-        Interface::new(p.sample_time(SampleTime::Inherited)?).input("u", Width::Fixed(ws.iter().sum()), true);
+    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).piecewise_constant().input(
+        "u",
+        Width::Fixed(ws.iter().sum()),
+        true,
+    );
     for (i, w) in ws.iter().enumerate() {
         iface = iface.output(&format!("y{}", i + 1), Width::Fixed(*w));
     }
@@ -202,6 +205,7 @@ fn build_selector(p: &mut Params) -> Result<Built, Diagnostic> {
     let idx: Vec<usize> = idx.iter().map(|i| *i as usize - 1).collect();
     let n = idx.len();
     let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        .piecewise_constant()
         .input("u", Width::Common, true)
         .output("y", Width::Fixed(n));
     Ok(Built::new(Selector(idx), iface))
@@ -259,6 +263,7 @@ fn build_switch(p: &mut Params) -> Result<Built, Diagnostic> {
         _ => Criterion::AtLeast,
     };
     let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        .piecewise_constant()
         .input("u1", Width::Common, true)
         .input("control", Width::Fixed(1), true)
         .input("u2", Width::Common, true)

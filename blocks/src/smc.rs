@@ -185,11 +185,10 @@ fn build_smc(p: &mut Params) -> Result<Built, Diagnostic> {
     let k = p.number_where("k", None, |v| v >= 0.0 && v.is_finite(), "a gain >= 0")?;
     let phi = p.number_where("phi", Some(0.0), |v| v >= 0.0 && v.is_finite(), "a width >= 0")?;
     let equivalent = p.bool_or("equivalent_input", false)?;
-    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).input("e", Width::Fixed(1), true).input(
-        "de",
-        Width::Fixed(1),
-        true,
-    );
+    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        .piecewise_constant()
+        .input("e", Width::Fixed(1), true)
+        .input("de", Width::Fixed(1), true);
     if equivalent {
         iface = iface.input("u_eq", Width::Fixed(1), true);
     }

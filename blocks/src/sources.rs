@@ -112,13 +112,17 @@ impl<F: Fn(&Io) -> f64 + Send> Block for TimeFn<F> {
     }
 }
 
+/// A source y = f(t). `piecewise` declares that f changes only at `events`.
 fn scalar_source<F: Fn(&Io) -> f64 + Send + 'static>(
     p: &mut Params,
     events: Vec<f64>,
+    piecewise: bool,
     f: F,
 ) -> Result<Built, Diagnostic> {
     let st = p.sample_time(SampleTime::Continuous)?;
-    windowed(p, Built::new(TimeFn { f, events }, Interface::new(st).output("y", Width::Fixed(1))))
+    let mut iface = Interface::new(st).output("y", Width::Fixed(1));
+    iface.piecewise_constant = piecewise;
+    windowed(p, Built::new(TimeFn { f, events }, iface))
 }
 
 /// Zero outside an active window [on, off); the window's edges are events.
@@ -175,6 +179,7 @@ pub(crate) fn windowed(p: &mut Params, built: Built) -> Result<Built, Diagnostic
     let mut iface = built.iface;
     if iface.sample_time == SampleTime::Constant {
         iface.sample_time = SampleTime::Continuous;
+        iface.piecewise_constant = true;
     }
     Ok(Built { block: Box::new(Windowed { inner: built.block, on, off }), iface })
 }
@@ -197,24 +202,29 @@ fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
 fn build_step(p: &mut Params) -> Result<Built, Diagnostic> {
     let at = p.number_or("at", 0.0)?;
     let (initial, value) = (p.number_or("initial", 0.0)?, p.number_or("value", 1.0)?);
-    scalar_source(p, vec![at], move |io| if io.reached(at) { value } else { initial })
+    scalar_source(p, vec![at], true, move |io| if io.reached(at) { value } else { initial })
 }
 
 fn build_ramp(p: &mut Params) -> Result<Built, Diagnostic> {
     let (slope, start, initial) =
         (p.number_or("slope", 1.0)?, p.number_or("start", 0.0)?, p.number_or("initial", 0.0)?);
-    scalar_source(p, vec![start], move |io| if io.t > start { initial + slope * (io.t - start) } else { initial })
+    scalar_source(
+        p,
+        vec![start],
+        false,
+        move |io| if io.t > start { initial + slope * (io.t - start) } else { initial },
+    )
 }
 
 fn build_sine(p: &mut Params) -> Result<Built, Diagnostic> {
     let amplitude = p.number_or("amplitude", 1.0)?;
     let w = 2.0 * std::f64::consts::PI * p.number_or("frequency", 1.0)?;
     let (phase, bias) = (p.number_or("phase", 0.0)?, p.number_or("bias", 0.0)?);
-    scalar_source(p, Vec::new(), move |io| bias + amplitude * (w * io.t + phase).sin())
+    scalar_source(p, Vec::new(), false, move |io| bias + amplitude * (w * io.t + phase).sin())
 }
 
 fn build_clock(p: &mut Params) -> Result<Built, Diagnostic> {
-    scalar_source(p, Vec::new(), |io| io.t)
+    scalar_source(p, Vec::new(), false, |io| io.t)
 }
 
 fn build_pulse(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -224,7 +234,7 @@ fn build_pulse(p: &mut Params) -> Result<Built, Diagnostic> {
     let delay = p.number_or("delay", 0.0)?;
     let st = p.sample_time(SampleTime::Continuous)?;
     let pulse = Pulse { amplitude, period, high: duty * period, delay };
-    windowed(p, Built::new(pulse, Interface::new(st).output("y", Width::Fixed(1))))
+    windowed(p, Built::new(pulse, Interface::new(st).piecewise_constant().output("y", Width::Fixed(1))))
 }
 
 /// Edges are computed as `delay + k·period` (and `+ high`), the same

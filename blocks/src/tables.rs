@@ -134,7 +134,7 @@ fn build_lookup(p: &mut Params) -> Result<Built, Diagnostic> {
     };
     let table = Table::new(x, y, outside).map_err(|m| p.error("y", m))?;
     let st = p.sample_time(SampleTime::Inherited)?;
-    let iface = Interface::new(st).input("u", Width::Common, true).output("y", Width::Common);
+    let iface = Interface::new(st).piecewise_constant().input("u", Width::Common, true).output("y", Width::Common);
     Ok(Built::new(Lookup(table), iface))
 }
 

@@ -21,6 +21,7 @@
 //! `output` must be idempotent within a major step: it may run twice (after
 //! a [`Block::major_step`] reset) and must not advance state.
 
+use ctlgraph_solver::StateSpace;
 use std::fmt;
 
 /// When a block runs.
@@ -132,11 +133,26 @@ pub struct Interface {
     pub inputs: Vec<InputPort>,
     pub outputs: Vec<OutputPort>,
     pub sample_time: SampleTime,
+    /// See [`Interface::piecewise_constant`].
+    pub piecewise_constant: bool,
 }
 
 impl Interface {
     pub fn new(sample_time: SampleTime) -> Self {
-        Interface { inputs: Vec::new(), outputs: Vec::new(), sample_time }
+        Interface { inputs: Vec::new(), outputs: Vec::new(), sample_time, piecewise_constant: false }
+    }
+
+    /// Declares that the outputs stay constant between major steps whenever
+    /// the inputs do: a function of the inputs and of modes or memory that
+    /// change only at major steps (a sum, a saturation, a fuzzy system), or
+    /// a source that changes only at its events (a step). Not for blocks
+    /// that read `io.t` or have continuous states. The simulator then skips
+    /// the block in the solver's minor steps where nothing there reads it,
+    /// and LTI blocks it drives can be stepped exactly (Simulink calls such
+    /// signals "fixed in minor step").
+    pub fn piecewise_constant(mut self) -> Self {
+        self.piecewise_constant = true;
+        self
     }
 
     /// Adds an input port.
@@ -359,6 +375,14 @@ pub trait Block: Send {
     /// (an edge-triggered reset) must not re-derive it from values there,
     /// which lie within a few ulps of zero on either side.
     fn crossing_located(&mut self, _k: usize) {}
+
+    /// The block's matrices when it is a continuous LTI system whose states
+    /// are exactly the system's (transfer functions, zpk, state space): the
+    /// simulator may then advance it by its exact zero-order-hold transition
+    /// instead of integrating it, where its inputs are piecewise constant.
+    fn lti(&self) -> Option<&StateSpace> {
+        None
+    }
 
     /// Runs at every major step after all outputs, for continuous blocks
     /// that [`Block::needs_major_step`]: the block may switch modes that

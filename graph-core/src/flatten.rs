@@ -23,6 +23,10 @@ pub struct SimConfig {
     pub method: Method,
     pub seed: u64,
     pub zero_crossing: ZeroCrossing,
+    /// `solver: { exact_lti: … }` (default true): continuous LTI blocks
+    /// driven by piecewise-constant signals are stepped by their exact
+    /// zero-order-hold transition under fixed-step methods.
+    pub exact_lti: bool,
     /// Whether `max_step` was left to its default, which then follows the
     /// run's effective stop time (`--stop-time`), not the file's.
     pub default_max_step: bool,
@@ -193,7 +197,8 @@ fn eval_parameters(
 }
 
 const SIM_KEYS: [&str; 3] = ["stop", "solver", "seed"];
-const SOLVER_KEYS: [&str; 7] = ["method", "step", "rtol", "atol", "max_step", "initial_step", "zero_crossing"];
+const SOLVER_KEYS: [&str; 8] =
+    ["method", "step", "rtol", "atol", "max_step", "initial_step", "zero_crossing", "exact_lti"];
 const METHODS: [&str; 5] = ["dopri5", "trbdf2", "rk4", "heun", "euler"];
 
 fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, Diagnostic> {
@@ -321,6 +326,19 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
             }
         },
     };
+    let exact_lti = match yaml::lookup(solver_entries, "exact_lti") {
+        None => true,
+        Some(v) => match v.kind {
+            Kind::Bool(b) => b,
+            _ => {
+                return Err(Diagnostic::at(
+                    &v.pos,
+                    format!("`exact_lti` must be true or false, found {}", v.describe()),
+                )
+                .with_hint("false integrates every continuous block with the solver, as Simulink does"));
+            }
+        },
+    };
     if !method.is_adaptive() && stop / method.max_step() > MAX_STEPS {
         let pos =
             yaml::lookup(solver_entries, "step").map(|v| v.pos.clone()).unwrap_or_else(|| Pos::new("?".into(), 0, 0));
@@ -335,7 +353,7 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
     }
     let default_max_step = method.max_step().is_nan();
     let method = if default_max_step { method.with_max_step(method.default_max_step(stop)) } else { method };
-    Ok(SimConfig { stop, method, seed, zero_crossing, default_max_step })
+    Ok(SimConfig { stop, method, seed, zero_crossing, exact_lti, default_max_step })
 }
 
 fn check_keys(entries: &[(Key, Yaml)], known: &[&str], section: &str) -> Result<(), Diagnostic> {

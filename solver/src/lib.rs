@@ -11,6 +11,8 @@ pub mod dense_lu;
 pub mod lti;
 pub mod ode;
 pub mod poly;
+pub mod zoh;
 
 pub use lti::{StateSpace, tf2ss, zpk2tf};
 pub use ode::{Integrator, Method, OdeSystem, SolverError, Stats};
+pub use zoh::Zoh;

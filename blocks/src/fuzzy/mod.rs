@@ -94,7 +94,7 @@ fn build_fuzzy(p: &mut Params) -> Result<Built, Diagnostic> {
         },
         resolution: p.count_or("resolution", 201, 100_000)?.max(2),
     };
-    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?);
+    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).piecewise_constant();
     for v in &inputs {
         iface = iface.input(&v.name, Width::Fixed(1), true);
     }

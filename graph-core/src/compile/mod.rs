@@ -3,6 +3,7 @@
 //! widths and rates, sort by direct-feedthrough edges and lay out one flat
 //! signal buffer with every input resolved to an index.
 
+mod between;
 mod schedule;
 mod wiring;
 
@@ -10,6 +11,7 @@ use crate::block::{Block, Interface, Port, SampleTime, Width};
 use crate::diag::{Diagnostic, Pos};
 use crate::flatten::{FlatBlock, FlatGraph, MAX_STEPS, SimConfig};
 use crate::registry::Registry;
+pub(crate) use between::Between;
 use schedule::{resolve_rates, sort};
 use std::collections::HashMap;
 use std::ops::Range;
@@ -38,6 +40,9 @@ pub struct BlockMeta {
     pub states: Range<usize>,
     pub input_names: Vec<String>,
     pub output_names: Vec<String>,
+    /// A continuous LTI block advanced by its exact zero-order-hold
+    /// transition between major steps instead of being integrated.
+    pub exact_zoh: bool,
 }
 
 /// The part of [`BlockMeta`] the step loop reads, kept compact and
@@ -95,6 +100,8 @@ pub struct Model {
     pub parameters: Vec<(String, f64)>,
     pub name: Option<String>,
     pub file: std::sync::Arc<str>,
+    /// What the solver's minor steps evaluate, integrate and hold.
+    pub(crate) between: Between,
 }
 
 struct Node<'g> {
@@ -148,6 +155,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let mut meta = Vec::with_capacity(order.len());
     let (mut in_ports, mut out_ports) = (Vec::new(), Vec::new());
     let mut n_states = 0;
+    let mut piecewise = Vec::with_capacity(order.len());
     let position: HashMap<usize, usize> = order.iter().enumerate().map(|(k, &i)| (i, k)).collect();
     for &i in &order {
         let node = &mut nodes[i];
@@ -177,7 +185,9 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
             states: n_states..n_states + ns,
             input_names: node.iface.inputs.iter().map(|p| p.name.clone()).collect(),
             output_names: node.iface.outputs.iter().map(|p| p.name.clone()).collect(),
+            exact_zoh: false,
         });
+        piecewise.push(node.iface.piecewise_constant);
         n_states += ns;
         model_blocks.push(block);
     }
@@ -214,7 +224,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
             }
         }
     }
-    Ok(Model {
+    let mut model = Model {
         checks,
         scopes: g.scopes.clone(),
         blocks: model_blocks,
@@ -232,7 +242,10 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         parameters: g.parameters.clone(),
         name: g.name.clone(),
         file: g.file.clone(),
-    })
+        between: Between::default(),
+    };
+    between::plan(&mut model, &piecewise);
+    Ok(model)
 }
 
 fn headers(columns: &[Column]) -> Vec<String> {
@@ -259,6 +272,12 @@ impl Model {
     /// vector signals).
     pub fn headers(&self) -> Vec<String> {
         headers(&self.columns)
+    }
+
+    /// How many continuous states the solver integrates; the others belong
+    /// to LTI blocks stepped by their exact zero-order-hold transition.
+    pub fn integrated_states(&self) -> usize {
+        self.between.n_integrated
     }
 
     /// The block owning signal `offset` and the name of its output port.

@@ -105,7 +105,7 @@ impl Watch {
             g0: vec![0.0; n],
             g1: vec![0.0; n],
             g: vec![0.0; n],
-            x_trial: vec![0.0; model.n_states],
+            x_trial: vec![0.0; model.between.n_integrated],
             events: 0,
             consecutive: 0,
             last_event: f64::NEG_INFINITY,

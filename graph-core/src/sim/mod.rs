@@ -14,7 +14,7 @@ mod events;
 
 use crate::block::{Io, Port};
 use crate::compile::{Model, Rate, Slot};
-use ctlgraph_solver::{Integrator, Method, OdeSystem, SolverError, Stats};
+use ctlgraph_solver::{Integrator, Method, OdeSystem, SolverError, Stats, Zoh};
 pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
 use std::fmt;
@@ -143,12 +143,17 @@ pub struct Simulator {
     major_steps: u64,
     /// Major steps in a row at which time did not advance.
     stalled: u32,
-    /// Blocks evaluated in minor steps (continuous rate), execution order.
-    continuous: Vec<usize>,
-    /// Blocks with continuous states.
-    stateful: Vec<usize>,
     /// Zero-crossing functions and their detection.
     watch: Watch,
+    /// LTI blocks stepped exactly (see [`crate::compile::Between`]).
+    held: Vec<Held>,
+}
+
+/// A held LTI block: its exact transitions and its input at the last major step.
+struct Held {
+    block: usize,
+    zoh: Zoh,
+    u: Vec<f64>,
 }
 
 impl Simulator {
@@ -174,12 +179,20 @@ impl Simulator {
             .fold(f64::INFINITY, f64::min);
         let continuous: Vec<usize> =
             (0..model.meta.len()).filter(|&i| model.meta[i].rate == Rate::Continuous).collect();
-        let stateful = (0..model.meta.len()).filter(|&i| !model.meta[i].states.is_empty()).collect();
         let watch = Watch::new(&model, &continuous, model.sim.zero_crossing);
+        let held = model
+            .between
+            .held
+            .iter()
+            .filter_map(|&block| {
+                let ss = model.blocks[block].lti()?.clone();
+                Some(Held { block, u: vec![0.0; ss.m], zoh: Zoh::new(ss) })
+            })
+            .collect();
         let mut sim = Simulator {
             signals: vec![0.0; model.signal_len],
             x: vec![0.0; model.n_states],
-            integ: Integrator::new(method, model.n_states),
+            integ: Integrator::new(method, model.between.n_integrated),
             clocks,
             grid_tick: 0,
             grid_step,
@@ -191,9 +204,8 @@ impl Simulator {
             next_event: f64::INFINITY,
             major_steps: 0,
             stalled: 0,
-            continuous,
-            stateful,
             watch,
+            held,
             model,
         };
         sim.reset();
@@ -337,25 +349,33 @@ impl Simulator {
     /// to the first zero crossing before it.
     pub fn advance(&mut self) -> Result<(), SimError> {
         self.sweep(true);
+        for h in &mut self.held {
+            let port = self.model.in_ports[self.model.slots[h.block].inputs.start];
+            h.u.copy_from_slice(&self.signals[port.offset..port.offset + port.width]);
+        }
         let target = self.next_major_time();
         let t0 = self.t;
+        let n_integrated = self.model.between.n_integrated;
+        let between = std::mem::take(&mut self.model.between);
         let mut sys = Minor {
             model: &mut self.model,
             signals: &mut self.signals,
-            continuous: &self.continuous,
-            stateful: &self.stateful,
+            continuous: &between.minor,
+            stateful: &between.integrated,
             t_end: target,
         };
-        let mut t_new = if self.x.is_empty() {
+        let x = &mut self.x[..n_integrated];
+        let mut t_new = if x.is_empty() {
             // Nothing to integrate; max_step still bounds the adaptive
             // method's major steps so continuous sources are sampled finely.
             target.min(t0 + self.integ.method().max_step())
         } else {
-            match self.integ.advance(&mut sys, t0, target, &mut self.x) {
+            match self.integ.advance(&mut sys, t0, target, x) {
                 Ok(t) => t,
                 // A state that blew up inside the step: name its block, as a
                 // blow-up at a major step does.
                 Err(SolverError::NonFinite { t, state: Some(k) }) => {
+                    self.model.between = between;
                     let owner = self.model.meta.iter().find(|m| m.states.contains(&k));
                     return Err(SimError::NonFinite {
                         t,
@@ -364,10 +384,14 @@ impl Simulator {
                         value: f64::NAN,
                     });
                 }
-                Err(error) => return Err(SimError::Solver { t: t0, error }),
+                Err(error) => {
+                    self.model.between = between;
+                    return Err(SimError::Solver { t: t0, error });
+                }
             }
         };
-        let event = self.watch.locate(&mut sys, &mut self.integ, t0, t_new, &mut self.x);
+        let event = self.watch.locate(&mut sys, &mut self.integ, t0, t_new, x);
+        self.model.between = between;
         if let Some(t_event) = event {
             t_new = t_event;
             for (block, k) in self.watch.fired() {
@@ -380,13 +404,18 @@ impl Simulator {
         }
         // Land exactly on the target when the solver reached it.
         self.t = if (target - t_new).abs() <= self.tol { target } else { t_new };
+        for h in &mut self.held {
+            if self.t > t0 {
+                h.zoh.step(self.t - t0, &mut self.x[self.model.slots[h.block].states.clone()], &h.u);
+            }
+        }
         if self.grid_step > 0.0 {
             while self.grid.time(self.grid_tick) <= self.t + self.tol {
                 self.grid_tick += 1;
             }
         }
         let mut clamped = false;
-        for &i in &self.stateful {
+        for &i in &self.model.between.integrated {
             let meta = &self.model.slots[i];
             clamped |= self.model.blocks[i].clamp_states(&mut self.x[meta.states.clone()]);
         }
