@@ -239,6 +239,11 @@ impl Block for Sum {
             io.set(0, self.signs[0] * s);
             return;
         }
+        if io.output_width(0) == 1 {
+            let v: f64 = self.signs.iter().enumerate().map(|(i, s)| s * io.u(i)).sum();
+            io.set(0, v);
+            return;
+        }
         for k in 0..io.output_width(0) {
             let v: f64 = self.signs.iter().enumerate().map(|(i, s)| s * io.u_at(i, k)).sum();
             io.set_at(0, k, v);

@@ -7,7 +7,7 @@ use crate::params::eval_number;
 use crate::spec::{BlockSpec, Endpoint, GraphFile};
 use crate::yaml::{self, Key, Kind, Yaml};
 use ctlgraph_solver::Method;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -409,11 +409,11 @@ fn expand(
         subs.insert(&b.name, inner.clone());
         out.subsystems.insert(path, inner);
     }
-    let names: Vec<&str> = g.blocks.iter().map(|b| b.name.as_str()).collect();
+    let names: HashSet<&str> = g.blocks.iter().map(|b| b.name.as_str()).collect();
     let resolve = |ep: &Endpoint, is_src: bool| -> Result<Endpoint, Diagnostic> {
-        if !names.contains(&ep.block.as_str()) {
+        if !names.contains(ep.block.as_str()) {
             return Err(Diagnostic::at(&ep.pos, format!("wire: no block named `{}`", ep.block))
-                .suggest(&ep.block, names.iter().copied()));
+                .suggest(&ep.block, g.blocks.iter().map(|b| b.name.as_str())));
         }
         let Some((ins, outs)) = subs.get(ep.block.as_str()) else {
             return Ok(Endpoint { block: format!("{prefix}{}", ep.block), ..ep.clone() });

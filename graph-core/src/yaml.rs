@@ -83,6 +83,21 @@ pub fn lookup<'a>(map: &'a [(Key, Yaml)], name: &str) -> Option<&'a Yaml> {
     map.iter().find(|(k, _)| k.name == name).map(|(_, v)| v)
 }
 
+/// Most YAML nodes (maps, sequences, scalars) a graph file may have: a
+/// million blocks in flow style take about ten million.
+pub const MAX_YAML_NODES: usize = 20_000_000;
+
+/// serde-saphyr's limits sized for graphs of a million blocks, its alias
+/// protections (alias count, alias-to-anchor ratio, replayed events) kept
+/// at their defaults, so a billion-laughs file is still refused at once.
+fn budget() -> serde_saphyr::Budget {
+    let mut budget = serde_saphyr::Budget::default();
+    budget.max_nodes = MAX_YAML_NODES;
+    budget.max_events = 2 * MAX_YAML_NODES;
+    budget.max_total_scalar_bytes = 256 << 20;
+    budget
+}
+
 /// Parses a YAML document; syntax errors carry their position. Booleans
 /// are YAML 1.2's `true`/`false` only: blocks named `y`, `n`, `on` or
 /// `off` stay strings, as a control engineer would expect.
@@ -92,6 +107,7 @@ pub fn parse(text: &str, file: &Arc<str>) -> Result<Yaml, Diagnostic> {
     // `.inf` is YAML's infinity, as `inf` is the expressions'; a NaN is
     // refused where the number is used, at its position.
     options.non_finite_float_policy = serde_saphyr::NonFiniteFloatPolicy::PassThrough;
+    options.budget = Some(budget());
     match serde_saphyr::from_str_with_options::<Spanned<Node>>(text, options) {
         Ok(root) => Ok(convert(root, file)),
         Err(err) => Err(syntax_error(&err, file)),

@@ -85,7 +85,10 @@ impl Zoh {
             }
             self.x_next[i] = v;
         }
-        x.copy_from_slice(&self.x_next);
+        // A loop, not copy_from_slice: for a few states a memmove call costs more.
+        for (xi, &v) in x.iter_mut().zip(&self.x_next) {
+            *xi = v;
+        }
     }
 
     /// Φ(dt) and Γ(dt) as (n×n, n×m) row-major matrices.

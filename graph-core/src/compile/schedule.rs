@@ -7,17 +7,21 @@ use crate::block::SampleTime;
 use crate::diag::Diagnostic;
 use petgraph::graph::{DiGraph, NodeIndex};
 use std::cmp::Reverse;
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::{BinaryHeap, HashMap, HashSet};
 
 /// Execution order: a topological order of the direct-feedthrough edges,
 /// ties broken by declaration order so listings read like the file.
 pub(super) fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>, Diagnostic> {
     let mut graph = DiGraph::<usize, ()>::new();
     let ids: Vec<NodeIndex> = (0..nodes.len()).map(|i| graph.add_node(i)).collect();
+    // One edge per pair (two wires between the same blocks order them once);
+    // a set, not petgraph's update_edge, which scans the source's edges and
+    // makes a fan-out of n quadratic.
+    let mut seen = HashSet::new();
     for (i, ds) in drivers.iter().enumerate() {
         for (p, d) in ds.iter().enumerate() {
-            if nodes[i].iface.inputs[p].feedthrough {
-                graph.update_edge(ids[d.src], ids[i], ());
+            if nodes[i].iface.inputs[p].feedthrough && seen.insert((d.src, i)) {
+                graph.add_edge(ids[d.src], ids[i], ());
             }
         }
     }

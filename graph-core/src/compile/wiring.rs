@@ -9,7 +9,7 @@ use crate::flatten::{FlatGraph, INPORT, OUTPORT, resolve_sub_port};
 use crate::params::Params;
 use crate::registry::Registry;
 use crate::spec::Endpoint;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 pub(super) fn instantiate<'g>(g: &'g FlatGraph, reg: &Registry) -> Result<Vec<Node<'g>>, Diagnostic> {
     let mut nodes = Vec::with_capacity(g.blocks.len());
@@ -213,6 +213,7 @@ pub(super) fn record_columns(
     out_offset: &HashMap<(usize, usize), Port>,
 ) -> Result<Vec<Column>, Diagnostic> {
     let mut columns: Vec<Column> = Vec::new();
+    let mut names: HashSet<String> = HashSet::new();
     let mut push = |name: String, port: Port, pos: Option<&Pos>, unit: Option<String>| -> Result<(), Diagnostic> {
         if name == "t" {
             let message = "`t` is the time column: record this signal under another name".to_string();
@@ -221,7 +222,7 @@ pub(super) fn record_columns(
                 None => Diagnostic::plain(message),
             });
         }
-        if columns.iter().any(|c| c.name == name) {
+        if !names.insert(name.clone()) {
             let message = format!("`{name}` is recorded twice");
             return Err(match pos {
                 Some(p) => Diagnostic::at(p, message).with_hint("rename one: `other_name: block.port`"),

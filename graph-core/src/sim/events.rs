@@ -168,6 +168,9 @@ impl Watch {
     /// is therefore read just after `t0` (CVODE does the same), so that it
     /// leaving and coming back within one step is still an event.
     pub fn locate(&mut self, sys: &mut Minor, integ: &mut Integrator, t0: f64, t1: f64, x: &mut [f64]) -> Option<f64> {
+        if self.blocks.is_empty() {
+            return None;
+        }
         std::mem::swap(&mut self.restart, &mut self.fired);
         self.fired.iter_mut().for_each(|f| *f = false);
         if !self.active.iter().any(|&a| a) || t1 <= t0 {

@@ -13,7 +13,7 @@
 mod events;
 
 use crate::block::{Io, Port};
-use crate::compile::{Model, Rate, Slot};
+use crate::compile::{Between, Model, Rate, Slot};
 use ctlgraph_solver::{Integrator, Method, OdeSystem, SolverError, Stats, Zoh};
 pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
@@ -102,14 +102,17 @@ impl Grid {
 struct Clock {
     grid: Grid,
     offset: f64,
-    /// Index of the next hit not yet taken.
+    /// Index of the next hit not yet taken, and its time (kept, not
+    /// recomputed: the step loop asks for it several times per step).
     tick: u64,
+    next: f64,
     hit: bool,
 }
 
 impl Clock {
-    fn next_time(&self) -> f64 {
-        self.offset + self.grid.time(self.tick)
+    fn set_tick(&mut self, tick: u64) {
+        self.tick = tick;
+        self.next = self.offset + self.grid.time(tick);
     }
 }
 
@@ -129,10 +132,9 @@ pub struct Simulator {
     x: Vec<f64>,
     integ: Integrator,
     clocks: Vec<Clock>,
-    /// Fixed-step grid: next tick and step (0 for the adaptive method).
-    grid_tick: u64,
+    /// Fixed-step grid: its step (0 for the adaptive methods) and position.
     grid_step: f64,
-    grid: Grid,
+    grid: Clock,
     t: f64,
     stop: f64,
     /// Times closer than this are the same major step.
@@ -145,6 +147,8 @@ pub struct Simulator {
     stalled: u32,
     /// Zero-crossing functions and their detection.
     watch: Watch,
+    /// What minor steps evaluate and integrate (the model's plan).
+    between: Between,
     /// LTI blocks stepped exactly (see [`crate::compile::Between`]).
     held: Vec<Held>,
 }
@@ -169,7 +173,7 @@ impl Simulator {
         let clocks: Vec<Clock> = model
             .clocks
             .iter()
-            .map(|&(period, offset)| Clock { grid: Grid::new(period), offset, tick: 0, hit: false })
+            .map(|&(period, offset)| Clock { grid: Grid::new(period), offset, tick: 0, next: offset, hit: false })
             .collect();
         let smallest = clocks
             .iter()
@@ -194,9 +198,8 @@ impl Simulator {
             x: vec![0.0; model.n_states],
             integ: Integrator::new(method, model.between.n_integrated),
             clocks,
-            grid_tick: 0,
             grid_step,
-            grid: Grid::new(grid_step),
+            grid: Clock { grid: Grid::new(grid_step), offset: 0.0, tick: 0, next: 0.0, hit: false },
             t: 0.0,
             stop,
             tol: 1e-9 * smallest,
@@ -206,6 +209,7 @@ impl Simulator {
             stalled: 0,
             watch,
             held,
+            between: model.between.clone(),
             model,
         };
         sim.reset();
@@ -217,13 +221,13 @@ impl Simulator {
         self.t = 0.0;
         self.first = true;
         self.major_steps = 0;
-        self.grid_tick = 1;
+        self.grid.set_tick(1);
         self.signals.iter_mut().for_each(|s| *s = 0.0);
         for (b, m) in self.model.blocks.iter_mut().zip(&self.model.slots) {
             b.initialize(&mut self.x[m.states.clone()]);
         }
         for c in &mut self.clocks {
-            c.tick = 0;
+            c.set_tick(0);
         }
         self.mark_hits();
         self.next_event = self.earliest_event();
@@ -275,9 +279,9 @@ impl Simulator {
     fn mark_hits(&mut self) -> bool {
         let mut any = false;
         for c in &mut self.clocks {
-            c.hit = c.next_time() <= self.t + self.tol;
+            c.hit = c.next <= self.t + self.tol;
             if c.hit {
-                c.tick += 1;
+                c.set_tick(c.tick + 1);
                 any = true;
             }
         }
@@ -317,7 +321,9 @@ impl Simulator {
         }
         self.first = false;
         self.watch.record_signs(&mut self.model, &mut self.signals, &self.x, self.t);
-        if let Some(k) = self.signals.iter().position(|v| !v.is_finite()) {
+        if !all_finite(&self.signals)
+            && let Some(k) = self.signals.iter().position(|v| !v.is_finite())
+        {
             let (block, port) = self.model.signal_owner(k).map_or(("?".to_string(), "?"), |(m, p)| (m.name.clone(), p));
             let diagnosis =
                 self.model.meta.iter().position(|m| m.name == block).and_then(|i| self.model.blocks[i].diagnose());
@@ -355,16 +361,14 @@ impl Simulator {
         }
         let target = self.next_major_time();
         let t0 = self.t;
-        let n_integrated = self.model.between.n_integrated;
-        let between = std::mem::take(&mut self.model.between);
         let mut sys = Minor {
             model: &mut self.model,
             signals: &mut self.signals,
-            continuous: &between.minor,
-            stateful: &between.integrated,
+            continuous: &self.between.minor,
+            stateful: &self.between.integrated,
             t_end: target,
         };
-        let x = &mut self.x[..n_integrated];
+        let x = &mut self.x[..self.between.n_integrated];
         let mut t_new = if x.is_empty() {
             // Nothing to integrate; max_step still bounds the adaptive
             // method's major steps so continuous sources are sampled finely.
@@ -375,7 +379,6 @@ impl Simulator {
                 // A state that blew up inside the step: name its block, as a
                 // blow-up at a major step does.
                 Err(SolverError::NonFinite { t, state: Some(k) }) => {
-                    self.model.between = between;
                     let owner = self.model.meta.iter().find(|m| m.states.contains(&k));
                     return Err(SimError::NonFinite {
                         t,
@@ -384,14 +387,10 @@ impl Simulator {
                         value: f64::NAN,
                     });
                 }
-                Err(error) => {
-                    self.model.between = between;
-                    return Err(SimError::Solver { t: t0, error });
-                }
+                Err(error) => return Err(SimError::Solver { t: t0, error }),
             }
         };
         let event = self.watch.locate(&mut sys, &mut self.integ, t0, t_new, x);
-        self.model.between = between;
         if let Some(t_event) = event {
             t_new = t_event;
             for (block, k) in self.watch.fired() {
@@ -410,12 +409,12 @@ impl Simulator {
             }
         }
         if self.grid_step > 0.0 {
-            while self.grid.time(self.grid_tick) <= self.t + self.tol {
-                self.grid_tick += 1;
+            while self.grid.next <= self.t + self.tol {
+                self.grid.set_tick(self.grid.tick + 1);
             }
         }
         let mut clamped = false;
-        for &i in &self.model.between.integrated {
+        for &i in &self.between.integrated {
             let meta = &self.model.slots[i];
             clamped |= self.model.blocks[i].clamp_states(&mut self.x[meta.states.clone()]);
         }
@@ -427,7 +426,9 @@ impl Simulator {
         if hit || block_event || clamped {
             self.integ.invalidate();
         }
-        if let Some(k) = self.x.iter().position(|v| !v.is_finite()) {
+        if !all_finite(&self.x)
+            && let Some(k) = self.x.iter().position(|v| !v.is_finite())
+        {
             let owner = self.model.meta.iter().find(|m| m.states.contains(&k)).map_or("?", |m| m.name.as_str());
             return Err(SimError::NonFinite {
                 t: self.t,
@@ -457,10 +458,10 @@ impl Simulator {
     fn next_major_time(&self) -> f64 {
         let mut next = self.stop;
         for c in &self.clocks {
-            next = next.min(c.next_time());
+            next = next.min(c.next);
         }
         if self.grid_step > 0.0 {
-            next = next.min(self.grid.time(self.grid_tick));
+            next = next.min(self.grid.next);
         }
         if self.next_event <= next + self.tol { self.next_event } else { next }
     }
@@ -483,6 +484,20 @@ impl Simulator {
             self.advance()?;
         }
     }
+}
+
+/// Whether every value is finite, without a branch per value: v − v is 0
+/// for finite v and NaN for ±inf and NaN.
+fn all_finite(values: &[f64]) -> bool {
+    let mut acc = [0.0f64; 4];
+    let chunks = values.chunks_exact(4);
+    let tail = chunks.remainder().iter().fold(0.0, |a, &v| a + (v - v));
+    for c in chunks {
+        for k in 0..4 {
+            acc[k] += c[k] - c[k];
+        }
+    }
+    (acc[0] + acc[1] + acc[2] + acc[3] + tail) == 0.0
 }
 
 pub(crate) fn io_for<'a>(

@@ -1,0 +1,78 @@
+//! How compile time and the cost of a step grow with the graph: a chain of
+//! n gains (each feeding the next) and a fan-out of n gains from one
+//! source, n = 10 … 100 000, each ending in a sum or an integrator so the
+//! whole graph is live. Criterion reports per run: compile (parse, expand,
+//! sort, lay out) and 100 RK4 steps; divide the step time by 100·n for ns
+//! per block-step.
+//!
+//!     cargo bench --bench scaling
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use ctlgraph_core::Simulator;
+use std::fmt::Write;
+use std::hint::black_box;
+
+const STEPS: usize = 100;
+
+/// `u → g1 → g2 → … → gn → integrator`.
+fn chain(n: usize) -> String {
+    let mut g = String::from("simulation: { stop: 1.0, solver: { method: rk4, step: 0.01 } }\nblocks:\n");
+    g.push_str("  u: { type: sine }\n  x: { type: integrator }\n");
+    for i in 1..=n {
+        writeln!(g, "  g{i}: {{ type: gain, k: 1.0 }}").unwrap();
+    }
+    g.push_str("wires:\n  - u -> g1\n");
+    for i in 1..n {
+        writeln!(g, "  - g{i} -> g{}", i + 1).unwrap();
+    }
+    writeln!(g, "  - g{n} -> x").unwrap();
+    g
+}
+
+/// `u → {g1 … gn}`, each gain into its own integrator.
+fn fan_out(n: usize) -> String {
+    let mut g = String::from("simulation: { stop: 1.0, solver: { method: rk4, step: 0.01 } }\nblocks:\n");
+    g.push_str("  u: { type: sine }\n");
+    for i in 1..=n {
+        writeln!(g, "  g{i}: {{ type: gain, k: 1.0 }}\n  x{i}: {{ type: integrator }}").unwrap();
+    }
+    g.push_str("wires:\n");
+    for i in 1..=n {
+        writeln!(g, "  - u -> g{i}\n  - g{i} -> x{i}").unwrap();
+    }
+    g
+}
+
+fn bench(c: &mut Criterion) {
+    for (shape, build) in [("chain", chain as fn(usize) -> String), ("fan_out", fan_out)] {
+        let mut group = c.benchmark_group(format!("{shape}_compile"));
+        group.sample_size(10);
+        for n in [10, 1_000, 100_000] {
+            let text = build(n);
+            group.bench_with_input(BenchmarkId::from_parameter(n), &text, |b, text| {
+                b.iter(|| black_box(ctlgraph::compile_str(text, "scaling.yaml", &[]).expect("compiles").signal_len))
+            });
+        }
+        group.finish();
+        let mut group = c.benchmark_group(format!("{shape}_{STEPS}_steps"));
+        group.sample_size(10);
+        for n in [10, 1_000, 100_000] {
+            let model = ctlgraph::compile_str(&build(n), "scaling.yaml", &[]).expect("compiles");
+            let mut sim = Simulator::new(model, None);
+            group.bench_function(BenchmarkId::from_parameter(n), |b| {
+                b.iter(|| {
+                    sim.reset();
+                    for _ in 0..STEPS {
+                        sim.outputs().expect("finite");
+                        sim.advance().expect("steps");
+                    }
+                    black_box(sim.states()[0])
+                })
+            });
+        }
+        group.finish();
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
