@@ -486,15 +486,15 @@ impl Simulator {
     }
 }
 
-/// Whether every value is finite, without a branch per value: v − v is 0
+/// Whether every value is finite, without a branch per value: 0·v is 0
 /// for finite v and NaN for ±inf and NaN.
 fn all_finite(values: &[f64]) -> bool {
     let mut acc = [0.0f64; 4];
     let chunks = values.chunks_exact(4);
-    let tail = chunks.remainder().iter().fold(0.0, |a, &v| a + (v - v));
+    let tail = chunks.remainder().iter().fold(0.0, |a, &v| a + 0.0 * v);
     for c in chunks {
         for k in 0..4 {
-            acc[k] += c[k] - c[k];
+            acc[k] += 0.0 * c[k];
         }
     }
     (acc[0] + acc[1] + acc[2] + acc[3] + tail) == 0.0
