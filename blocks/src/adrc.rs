@@ -305,6 +305,9 @@ struct Lsef {
 }
 
 impl Block for Lsef {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         let a: [f64; 2] = std::array::from_fn(|i| self.alpha_ports[i].map_or(self.alpha[i], |p| io.u(p)));
         let z = io.input(self.z_port);

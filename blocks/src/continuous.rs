@@ -97,6 +97,9 @@ struct Derivative {
 }
 
 impl Block for Derivative {
+    fn updates(&self) -> bool {
+        false
+    }
     fn set_width(&mut self, width: usize) -> Result<(), String> {
         self.width = width;
         Ok(())
@@ -151,6 +154,9 @@ impl Lti {
 }
 
 impl Block for Lti {
+    fn updates(&self) -> bool {
+        false
+    }
     fn num_states(&self) -> usize {
         self.ss.n
     }

@@ -269,6 +269,9 @@ struct NormalForce {
 }
 
 impl Block for NormalForce {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         let selector = io.u(2);
         let climbing = if self.by_slope { selector > 0.0 } else { selector >= 0.5 };

@@ -108,6 +108,9 @@ impl Integrator {
 }
 
 impl Block for Integrator {
+    fn updates(&self) -> bool {
+        false
+    }
     fn set_width(&mut self, width: usize) -> Result<(), String> {
         self.x0 = initial_vector(&self.initial, width)?;
         self.modes = vec![Mode::Free; width];

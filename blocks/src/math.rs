@@ -172,6 +172,9 @@ enum Gain {
 }
 
 impl Block for Gain {
+    fn updates(&self) -> bool {
+        false
+    }
     fn set_width(&mut self, width: usize) -> Result<(), String> {
         match self {
             Gain::Elementwise(k) if k.len() == 1 => {
@@ -233,6 +236,9 @@ struct Sum {
 }
 
 impl Block for Sum {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         if self.signs.len() == 1 {
             let s: f64 = io.input(0).iter().sum();
@@ -282,6 +288,9 @@ struct Product {
 }
 
 impl Block for Product {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         for k in 0..io.output_width(0) {
             let mut v = 1.0;
@@ -325,6 +334,9 @@ struct Extremum {
 }
 
 impl Block for Extremum {
+    fn updates(&self) -> bool {
+        false
+    }
     fn set_width(&mut self, width: usize) -> Result<(), String> {
         self.selected = vec![0; width];
         Ok(())
@@ -401,6 +413,9 @@ struct Fcn {
 }
 
 impl Block for Fcn {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         let n = self.vars.len() - 1;
         for i in 0..n {

@@ -104,6 +104,9 @@ impl Piecewise {
 }
 
 impl Block for Piecewise {
+    fn updates(&self) -> bool {
+        false
+    }
     fn set_width(&mut self, width: usize) -> Result<(), String> {
         self.modes = vec![0; width];
         Ok(())

@@ -131,6 +131,9 @@ fn widths(p: &mut Params, count_key: &str) -> Result<Vec<usize>, Diagnostic> {
 struct Concat;
 
 impl Block for Concat {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         let mut k = 0;
         for port in 0..io.num_inputs() {
@@ -155,6 +158,9 @@ fn build_mux(p: &mut Params) -> Result<Built, Diagnostic> {
 struct Split(Vec<usize>);
 
 impl Block for Split {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         let mut k = 0;
         for (port, &w) in self.0.iter().enumerate() {
@@ -183,6 +189,9 @@ fn build_demux(p: &mut Params) -> Result<Built, Diagnostic> {
 struct Selector(Vec<usize>);
 
 impl Block for Selector {
+    fn updates(&self) -> bool {
+        false
+    }
     fn set_width(&mut self, width: usize) -> Result<(), String> {
         match self.0.iter().find(|&&i| i >= width) {
             Some(i) => Err(format!("index {} is beyond the input's width {width}", i + 1)),
@@ -226,6 +235,9 @@ struct Switch {
 }
 
 impl Block for Switch {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         if io.may_switch() {
             let c = io.u(1);

@@ -102,6 +102,9 @@ struct TimeFn<F: Fn(&Io) -> f64 + Send> {
 }
 
 impl<F: Fn(&Io) -> f64 + Send> Block for TimeFn<F> {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         let y = (self.f)(io);
         io.set(0, y);
@@ -133,6 +136,9 @@ struct Windowed {
 }
 
 impl Block for Windowed {
+    fn updates(&self) -> bool {
+        self.inner.updates()
+    }
     fn set_width(&mut self, width: usize) -> Result<(), String> {
         self.inner.set_width(width)
     }
@@ -191,6 +197,9 @@ fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
     }
     struct Constant(Vec<f64>);
     impl Block for Constant {
+        fn updates(&self) -> bool {
+            false
+        }
         fn output(&mut self, io: &mut Io) {
             io.output(0).copy_from_slice(&self.0);
         }
@@ -254,6 +263,9 @@ impl Pulse {
 }
 
 impl Block for Pulse {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         let k = self.index(io.t);
         let mut y = 0.0;

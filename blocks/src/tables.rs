@@ -114,6 +114,9 @@ impl Table {
 struct Lookup(Table);
 
 impl Block for Lookup {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         for k in 0..io.output_width(0) {
             let v = self.0.eval(io.u_at(0, k));
@@ -141,6 +144,9 @@ fn build_lookup(p: &mut Params) -> Result<Built, Diagnostic> {
 struct Series(Table);
 
 impl Block for Series {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         let v = self.0.eval(io.t);
         io.set(0, v);

@@ -320,6 +320,13 @@ pub trait Block: Send {
     /// Advances discrete state (or major-step memory) after outputs.
     fn update(&mut self, _io: &mut Io) {}
 
+    /// Whether [`Block::update`] does anything. A block without discrete
+    /// state or major-step memory returns false, and the scheduler then
+    /// skips it in the update pass (a call saved per block and step).
+    fn updates(&self) -> bool {
+        true
+    }
+
     /// Writes the derivatives of the continuous states.
     fn derivatives(&mut self, _io: &Io, _dx: &mut [f64]) {}
 

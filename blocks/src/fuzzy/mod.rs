@@ -53,6 +53,9 @@ struct FuzzyBlock {
 }
 
 impl Block for FuzzyBlock {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         for i in 0..self.x.len() {
             self.x[i] = io.u(i);

@@ -151,6 +151,8 @@ pub struct Simulator {
     between: Between,
     /// LTI blocks stepped exactly (see [`crate::compile::Between`]).
     held: Vec<Held>,
+    /// Blocks with an `update` to run (execution order).
+    updating: Vec<usize>,
 }
 
 /// A held LTI block: its exact transitions and its input at the last major step.
@@ -210,6 +212,7 @@ impl Simulator {
             watch,
             held,
             between: model.between.clone(),
+            updating: (0..model.blocks.len()).filter(|&i| model.blocks[i].updates()).collect(),
             model,
         };
         sim.reset();
@@ -288,25 +291,39 @@ impl Simulator {
         any
     }
 
-    /// Runs `output` (or `update`) of every block due now, in execution
-    /// order: continuous blocks always, discrete blocks at their hits,
-    /// constant blocks on the first output pass only.
-    fn sweep(&mut self, update: bool) {
+    /// Runs `output` of every block due now, in execution order:
+    /// continuous blocks always, discrete blocks at their hits, constant
+    /// blocks on the first pass only.
+    fn sweep(&mut self) {
         let m = &mut self.model;
         for (i, block) in m.blocks.iter_mut().enumerate() {
             let slot = &m.slots[i];
             let due = match slot.rate {
                 Rate::Continuous => true,
-                Rate::Constant => self.first && !update,
+                Rate::Constant => self.first,
                 Rate::Discrete(c) => self.clocks[c].hit,
             };
             if due {
                 let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
-                if update {
-                    block.update(&mut io);
-                } else {
-                    block.output(&mut io);
-                }
+                block.output(&mut io);
+            }
+        }
+    }
+
+    /// Runs `update` of the blocks that have one (see [`crate::block::Block::updates`])
+    /// and are due now: continuous ones always, discrete ones at hits.
+    fn update_sweep(&mut self) {
+        let m = &mut self.model;
+        for &i in &self.updating {
+            let slot = &m.slots[i];
+            let due = match slot.rate {
+                Rate::Continuous => true,
+                Rate::Constant => false,
+                Rate::Discrete(c) => self.clocks[c].hit,
+            };
+            if due {
+                let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
+                m.blocks[i].update(&mut io);
             }
         }
     }
@@ -315,9 +332,9 @@ impl Simulator {
     /// block reset its states here), the zero-crossing signs for the next
     /// step, then a check that every signal is finite.
     pub fn outputs(&mut self) -> Result<(), SimError> {
-        self.sweep(false);
+        self.sweep();
         if self.major_step_events() {
-            self.sweep(false);
+            self.sweep();
         }
         self.first = false;
         self.watch.record_signs(&mut self.model, &mut self.signals, &self.x, self.t);
@@ -354,7 +371,7 @@ impl Simulator {
     /// of continuous blocks), then integration to the next major step — or
     /// to the first zero crossing before it.
     pub fn advance(&mut self) -> Result<(), SimError> {
-        self.sweep(true);
+        self.update_sweep();
         for h in &mut self.held {
             let port = self.model.in_ports[self.model.slots[h.block].inputs.start];
             h.u.copy_from_slice(&self.signals[port.offset..port.offset + port.width]);
