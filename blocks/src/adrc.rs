@@ -254,7 +254,7 @@ impl Block for Leso {
     }
     fn output(&mut self, io: &mut Io) {
         let z = if self.h > 0.0 { &self.z[..] } else { io.x };
-        io.output(0).copy_from_slice(z);
+        io.set_all(0, z);
     }
     fn update(&mut self, io: &mut Io) {
         if self.h > 0.0 {

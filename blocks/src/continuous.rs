@@ -169,7 +169,7 @@ impl Block for Lti {
         } else {
             self.ss.output_state_only(io.x, &mut self.y);
         }
-        io.output(0).copy_from_slice(&self.y);
+        io.set_all(0, &self.y);
     }
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
         self.ss.derivative(io.x, io.input(0), dx);

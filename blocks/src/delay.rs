@@ -353,7 +353,7 @@ impl Block for Delay {
 
     fn output(&mut self, io: &mut Io) {
         let w = self.initial.len();
-        io.output(0).copy_from_slice(&self.ring[self.head * w..(self.head + 1) * w]);
+        io.set_all(0, &self.ring[self.head * w..(self.head + 1) * w]);
     }
 
     fn update(&mut self, io: &mut Io) {

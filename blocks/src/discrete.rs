@@ -70,7 +70,7 @@ impl Block for DiscreteLti {
     }
     fn output(&mut self, io: &mut Io) {
         self.ss.output(&self.x, io.input(0), &mut self.y);
-        io.output(0).copy_from_slice(&self.y);
+        io.set_all(0, &self.y);
     }
     fn update(&mut self, io: &mut Io) {
         self.ss.derivative(&self.x, io.input(0), &mut self.next);

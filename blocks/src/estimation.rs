@@ -99,7 +99,7 @@ impl Block for Rls {
         self.reset();
     }
     fn output(&mut self, io: &mut Io) {
-        io.output(0).copy_from_slice(&self.theta);
+        io.set_all(0, &self.theta);
         io.set(1, self.error);
     }
     fn update(&mut self, io: &mut Io) {

@@ -131,9 +131,9 @@ impl Block for Integrator {
 
     fn output(&mut self, io: &mut Io) {
         let x = io.x;
-        io.output(0).copy_from_slice(x);
+        io.set_all(0, x);
         if io.num_outputs() > 1 {
-            io.output(1).copy_from_slice(x);
+            io.set_all(1, x);
         }
     }
 

@@ -201,7 +201,7 @@ fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
             false
         }
         fn output(&mut self, io: &mut Io) {
-            io.output(0).copy_from_slice(&self.0);
+            io.set_all(0, &self.0);
         }
     }
     let iface = Interface::new(SampleTime::Constant).output("y", Width::Fixed(value.len()));

@@ -273,6 +273,15 @@ impl<'a> Io<'a> {
         self.signals[self.outputs[port].offset] = value;
     }
 
+    /// Writes all elements of output `port` (an element loop: for the few
+    /// values of a port it is cheaper than `copy_from_slice`'s memmove).
+    #[inline]
+    pub fn set_all(&mut self, port: usize, values: &[f64]) {
+        for (o, &v) in self.output(port).iter_mut().zip(values) {
+            *o = v;
+        }
+    }
+
     /// Sets element `k` of output `port`.
     #[inline]
     pub fn set_at(&mut self, port: usize, k: usize, value: f64) {

@@ -374,7 +374,9 @@ impl Simulator {
         self.update_sweep();
         for h in &mut self.held {
             let port = self.model.in_ports[self.model.slots[h.block].inputs.start];
-            h.u.copy_from_slice(&self.signals[port.offset..port.offset + port.width]);
+            for (u, &s) in h.u.iter_mut().zip(&self.signals[port.offset..port.offset + port.width]) {
+                *u = s;
+            }
         }
         let target = self.next_major_time();
         let t0 = self.t;
