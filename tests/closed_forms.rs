@@ -122,3 +122,37 @@ fn step_switches_exactly_at_its_time() {
     let err = max_error(&trace, "i", |t| (t - 0.3).max(0.0));
     assert!(err < 1e-12, "integral of the step {err}");
 }
+
+/// A pulse train whose edges fall between the grid points (period 37 ms,
+/// duty 30 %, grid 10 ms) into a first-order lag: the steps around each
+/// edge are shorter than the grid's, the held transfer function is stepped
+/// by the exact transition of each length, and y matches the piecewise
+/// exponential solution at every sample.
+#[test]
+fn exact_zoh_follows_a_pulse_train_with_off_grid_edges() {
+    let yaml = "simulation: { stop: 1.0, solver: { method: rk4, step: 1.0e-2 } }\n\
+                blocks:\n  u: { type: pulse, period: 0.037, duty: 0.3 }\n  \
+                plant: { type: transfer_function, num: [1], den: [0.05, 1] }\n\
+                wires: [u -> plant]\nrecord: [y: plant]\n";
+    let trace = run(yaml);
+    assert!(trace.t().len() > 101, "edges add major steps: {}", trace.t().len());
+    // Exact: y relaxes towards u with tau = 0.05 between the edges.
+    let exact = |t: f64| {
+        let (mut y, mut s) = (0.0f64, 0.0f64);
+        let mut k = 0.0f64;
+        while s < t {
+            let (rise, fall) = (k * 0.037, k * 0.037 + 0.3 * 0.037);
+            for (start, end, u) in [(rise, fall, 1.0f64), (fall, (k + 1.0) * 0.037, 0.0)] {
+                let end = end.min(t);
+                if end > s.max(start) {
+                    y = u + (y - u) * (-(end - s.max(start)) / 0.05).exp();
+                    s = end;
+                }
+            }
+            k += 1.0;
+        }
+        y
+    };
+    let err = max_error(&trace, "y", exact);
+    assert!(err < 1e-12, "max error {err}");
+}

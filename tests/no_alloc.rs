@@ -139,6 +139,28 @@ fn stepping_allocates_nothing() {
     }
 }
 
+/// An LTI block stepped exactly, its steps cut by a pulse whose edges fall
+/// between grid points: step lengths keep changing, so the transition is
+/// recomputed inside the counted region, in the block's own work space.
+#[test]
+fn exact_zoh_with_changing_steps_allocates_nothing() {
+    let yaml = "
+simulation: { stop: 100.0, solver: { method: rk4, step: 1.0e-3 } }
+blocks:
+  r:     { type: pulse, period: 3.7e-3, duty: 0.3 }
+  d:     { type: step, at: 0.00123, value: 0.5 }
+  u:     { type: sum, signs: \"++\" }
+  plant: { type: transfer_function, num: [100], den: [1, 10, 100] }
+wires: [r -> u.u1, d -> u.u2, u -> plant]
+record: [y: plant]
+";
+    let model = ctlgraph::compile_str(yaml, "zoh.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
+    assert!(model.meta.iter().any(|m| m.exact_zoh), "the plant is held");
+    assert_eq!(count_allocations(model, 1, 5_000), 0);
+    let model = ctlgraph::compile_file("graphs/fladrc/fladrc.yaml".as_ref(), &[]).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(count_allocations(model, 1, 5_000), 0, "fladrc");
+}
+
 #[test]
 fn events_modes_and_delays_allocate_nothing_once_warm() {
     for (solver, warm_up) in
