@@ -34,6 +34,10 @@ pub const TYPES: &[BlockType] = &[
               2.242e4] is 1.639e4/(s² + 154.8 s + 2.242e4). Must be proper (deg num <= deg den). \
               Realised in controllable canonical form (MATLAB's tf2ss), zero initial state. Direct \
               feedthrough only when deg num = deg den.\n\
+              Under a fixed-step method, when its input is piecewise constant (driven by discrete, constant \
+              or step-like blocks) and nothing reads it inside a step, it is advanced by its exact \
+              zero-order-hold transition exp([A B; 0 0]·Δ) instead of being integrated (`ctlgraph check` \
+              says \"exact ZOH\"; `solver: { exact_lti: false }` integrates it, as Simulink does).\n\
               Stable region: every root of den in the open left half-plane; then |y| <= ‖g‖₁·sup|u|.",
         inputs: U_SCALAR,
         outputs: Y_SCALAR,
@@ -50,6 +54,10 @@ pub const TYPES: &[BlockType] = &[
         doc: "G(s) = gain·Π(s − zᵢ)/Π(s − pᵢ). A complex root is written [re, im] and stands for the \
               conjugate pair re ± j·im (listing both conjugates, as MATLAB does, is reported as an error; \
               write a pair twice for a repeated pair). Realised like transfer_function.\n\
+              Under a fixed-step method, when its input is piecewise constant (driven by discrete, constant \
+              or step-like blocks) and nothing reads it inside a step, it is advanced by its exact \
+              zero-order-hold transition exp([A B; 0 0]·Δ) instead of being integrated (`ctlgraph check` \
+              says \"exact ZOH\"; `solver: { exact_lti: false }` integrates it, as Simulink does).\n\
               Stable region: every pole with negative real part; then |y| <= ‖g‖₁·sup|u| and a unit step settles at the DC gain G(0).",
         inputs: U_SCALAR,
         outputs: Y_SCALAR,
@@ -66,6 +74,10 @@ pub const TYPES: &[BlockType] = &[
         summary: "x' = A x + B u, y = C x + D u.",
         doc: "Matrices as lists of rows. Input width = columns of B, output width = rows of C. D \
               defaults to zero (no direct feedthrough).\n\
+              Under a fixed-step method, when its input is piecewise constant (driven by discrete, constant \
+              or step-like blocks) and nothing reads it inside a step, it is advanced by its exact \
+              zero-order-hold transition exp([A B; 0 0]·Δ) instead of being integrated (`ctlgraph check` \
+              says \"exact ZOH\"; `solver: { exact_lti: false }` integrates it, as Simulink does).\n\
               Stable region: A Hurwitz (every eigenvalue with negative real part).",
         inputs: &[PortDoc { name: "u", doc: "width = columns of B" }],
         outputs: &[PortDoc { name: "y", doc: "width = rows of C" }],
