@@ -53,7 +53,7 @@ pub enum ZeroCrossing {
 pub struct FlatBlock {
     /// Full name: `name`, or `sub/name` inside subsystem `sub`.
     pub path: String,
-    pub spec: BlockSpec,
+    pub spec: Arc<BlockSpec>,
     pub scope: Arc<Vec<(String, f64)>>,
     pub dir: Arc<PathBuf>,
 }

@@ -20,7 +20,8 @@ pub struct GraphFile {
     /// Parameter definitions in order: name and value (number or expression).
     pub parameters: Vec<(Key, Yaml)>,
     pub simulation: Option<Yaml>,
-    pub blocks: Vec<BlockSpec>,
+    /// Shared, so that expanding a subsystem many times copies no specs.
+    pub blocks: Vec<Arc<BlockSpec>>,
     pub wires: Vec<WireSpec>,
     pub record: Vec<RecordSpec>,
     /// Log every n-th major step (1 = all).
@@ -98,7 +99,9 @@ impl GraphFile {
             None => Vec::new(),
         };
         let blocks = match yaml::lookup(top, "blocks") {
-            Some(b) => b.expect_map("`blocks`")?.iter().map(parse_block).collect::<Result<_, _>>()?,
+            Some(b) => {
+                b.expect_map("`blocks`")?.iter().map(|e| parse_block(e).map(Arc::new)).collect::<Result<_, _>>()?
+            }
             None => Vec::new(),
         };
         let wires = match yaml::lookup(top, "wires") {

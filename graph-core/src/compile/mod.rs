@@ -142,12 +142,14 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     }
 
     // Lay out outputs, then point every input at its driver's output.
-    let mut out_offset: HashMap<(usize, usize), Port> = HashMap::new();
+    // Per node, where each output port lives in the signal buffer.
+    let mut out_offset: Vec<Vec<Port>> = vec![Vec::new(); nodes.len()];
     let mut signal_len = 0;
     for &i in &order {
         for (p, port) in nodes[i].iface.outputs.iter().enumerate() {
             let width = resolved(port.width, nodes[i].width);
-            out_offset.insert((i, p), Port { offset: signal_len, width });
+            debug_assert_eq!(out_offset[i].len(), p);
+            out_offset[i].push(Port { offset: signal_len, width });
             signal_len += width;
         }
     }
@@ -156,17 +158,21 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let (mut in_ports, mut out_ports) = (Vec::new(), Vec::new());
     let mut n_states = 0;
     let mut piecewise = Vec::with_capacity(order.len());
-    let position: HashMap<usize, usize> = order.iter().enumerate().map(|(k, &i)| (i, k)).collect();
+    // Node index → place in the execution order.
+    let mut position = vec![0; nodes.len()];
+    for (k, &i) in order.iter().enumerate() {
+        position[i] = k;
+    }
     for &i in &order {
         let node = &mut nodes[i];
         let block = node.block.take().ok_or_else(|| Diagnostic::plain("internal: block built twice"))?;
         let in_start = in_ports.len();
         for d in &drivers[i] {
-            in_ports.push(out_offset[&(d.src, d.port)]);
+            in_ports.push(out_offset[d.src][d.port]);
         }
         let out_start = out_ports.len();
         for p in 0..node.iface.outputs.len() {
-            out_ports.push(out_offset[&(i, p)]);
+            out_ports.push(out_offset[i][p]);
         }
         let ns = block.num_states();
         let rate = rates[&i];
@@ -195,9 +201,9 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     for &i in &order {
         for (p, d) in drivers[i].iter().enumerate() {
             edges.push(Edge {
-                src: position[&d.src],
+                src: position[d.src],
                 src_port: d.port,
-                dst: position[&i],
+                dst: position[i],
                 dst_port: p,
                 feedthrough: nodes[i].iface.inputs[p].feedthrough,
             });

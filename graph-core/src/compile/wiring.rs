@@ -210,7 +210,7 @@ pub(super) fn record_columns(
     nodes: &[Node],
     index: &HashMap<&str, usize>,
     direct: &[Vec<Option<Driver>>],
-    out_offset: &HashMap<(usize, usize), Port>,
+    out_offset: &[Vec<Port>],
 ) -> Result<Vec<Column>, Diagnostic> {
     let mut columns: Vec<Column> = Vec::new();
     let mut names: HashSet<String> = HashSet::new();
@@ -243,7 +243,7 @@ pub(super) fn record_columns(
                 } else {
                     format!("{}.{}", n.flat.path, port.name)
                 };
-                push(name, out_offset[&(i, p)], None, None)?;
+                push(name, out_offset[i][p], None, None)?;
             }
         }
         return Ok(columns);
@@ -266,7 +266,7 @@ pub(super) fn record_columns(
             };
             (src, port) = (d.src, d.port);
         }
-        push(name.clone(), out_offset[&(src, port)], Some(&ep.pos), rec.unit.clone())?;
+        push(name.clone(), out_offset[src][port], Some(&ep.pos), rec.unit.clone())?;
     }
     Ok(columns)
 }
