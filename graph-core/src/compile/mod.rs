@@ -171,9 +171,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
             in_ports.push(out_offset[d.src][d.port]);
         }
         let out_start = out_ports.len();
-        for p in 0..node.iface.outputs.len() {
-            out_ports.push(out_offset[i][p]);
-        }
+        out_ports.extend_from_slice(&out_offset[i]);
         let ns = block.num_states();
         let rate = rates[&i];
         meta.push(BlockMeta {
