@@ -438,3 +438,30 @@ fn size_parameters_have_stated_limits() {
     let d = error(mux);
     assert!(d.message.contains("whole numbers from 1 to 1e6"), "{d}");
 }
+
+#[test]
+fn large_graphs_load_and_alias_bombs_do_not() {
+    // 60 000 gains in a chain: past the parser's default node budget
+    // (250 000 nodes), which stopped such a file at block 41 668. (A million
+    // blocks load too; that takes longer than a test should.)
+    let n = 60_000;
+    let mut g = String::from("simulation: { stop: 0.01, solver: { method: rk4, step: 0.01 } }\nblocks:\n  u: { type: step }\n");
+    for i in 1..=n {
+        g.push_str(&format!("  g{i}: {{ type: gain, k: 1.0 }}\n"));
+    }
+    g.push_str("wires:\n  - u -> g1\n");
+    for i in 1..n {
+        g.push_str(&format!("  - g{i} -> g{}\n", i + 1));
+    }
+    let model = ctlgraph::compile_str(&g, "big.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(model.meta.len(), n + 1);
+    // A billion laughs: nine levels of ten aliases each.
+    let mut bomb = String::from("a0: &a0 [x, x, x, x, x, x, x, x, x, x]\n");
+    for k in 1..10 {
+        let refs = vec![format!("*a{}", k - 1); 10].join(", ");
+        bomb.push_str(&format!("a{k}: &a{k} [{refs}]\n"));
+    }
+    bomb.push_str("blocks:\n  c: { type: constant }\n");
+    let d = error(&bomb);
+    assert!(d.message.contains("YAML") && d.pos.is_some(), "{d}");
+}

@@ -396,11 +396,15 @@ fn expand(
         let path = format!("{prefix}{}", b.name);
         if b.type_name != SUBSYSTEM {
             if out.blocks.len() >= MAX_BLOCKS {
-                return Err(Diagnostic::at(
+                let d = Diagnostic::at(
                     &b.pos,
                     format!("the graph expands to more than {MAX_BLOCKS} blocks (here, at `{path}`)"),
-                )
-                .with_hint("subsystems included many times over multiply: look for an include chain that doubles"));
+                );
+                return Err(if prefix.is_empty() && out.subsystems.is_empty() {
+                    d
+                } else {
+                    d.with_hint("subsystems included many times over multiply: look for an include chain that doubles")
+                });
             }
             out.blocks.push(FlatBlock { path, spec: b.clone(), scope: scope.clone(), dir: dir.clone() });
             continue;
