@@ -445,7 +445,8 @@ fn large_graphs_load_and_alias_bombs_do_not() {
     // (250 000 nodes), which stopped such a file at block 41 668. (A million
     // blocks load too; that takes longer than a test should.)
     let n = 60_000;
-    let mut g = String::from("simulation: { stop: 0.01, solver: { method: rk4, step: 0.01 } }\nblocks:\n  u: { type: step }\n");
+    let mut g =
+        String::from("simulation: { stop: 0.01, solver: { method: rk4, step: 0.01 } }\nblocks:\n  u: { type: step }\n");
     for i in 1..=n {
         g.push_str(&format!("  g{i}: {{ type: gain, k: 1.0 }}\n"));
     }
