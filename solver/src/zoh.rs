@@ -41,6 +41,8 @@ pub struct Zoh {
     cache: [Transition; 2],
     /// Which cache entry the next new step length replaces.
     oldest: usize,
+    /// How many exponentials have been computed (the cache's misses).
+    computed: u64,
     // Work space for the exponential: k×k with k = n + m.
     scaled: Vec<f64>,
     term: Vec<f64>,
@@ -57,6 +59,7 @@ impl Zoh {
         Zoh {
             cache: [empty.clone(), empty],
             oldest: 0,
+            computed: 0,
             scaled: vec![0.0; k * k],
             term: vec![0.0; k * k],
             sum: vec![0.0; k * k],
@@ -68,6 +71,12 @@ impl Zoh {
 
     pub fn system(&self) -> &StateSpace {
         &self.ss
+    }
+
+    /// How many matrix exponentials were computed so far: one per step
+    /// length not found in the cache.
+    pub fn exponentials_computed(&self) -> u64 {
+        self.computed
     }
 
     /// `x ← Φ(dt)·x + Γ(dt)·u`.
@@ -106,6 +115,7 @@ impl Zoh {
         }
         let slot = self.oldest;
         self.oldest = 1 - slot;
+        self.computed += 1;
         self.exponential(dt);
         let (n, m, k) = (self.ss.n, self.ss.m, self.ss.n + self.ss.m);
         let c = &mut self.cache[slot];
@@ -220,6 +230,40 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// `step` is Φx + Γu with two inputs of unequal sizes, and a step length
+    /// close to a cached one is not mistaken for it.
+    #[test]
+    fn step_applies_both_matrices_and_the_cache_tells_steps_apart() {
+        let ss = StateSpace::new(
+            vec![vec![0.0, 1.0], vec![-4.0, -0.4]],
+            vec![vec![0.5, 1.0], vec![1.0, -2.0]],
+            vec![vec![1.0, 0.0]],
+            vec![vec![0.0, 0.0]],
+        )
+        .unwrap();
+        let mut zoh = Zoh::new(ss.clone());
+        let (x0, u) = ([0.3, -1.1], [0.7, -1.3]);
+        for dt in [1e-4, 1.5e-4, 1e-4, 0.02] {
+            let mut fresh = Zoh::new(ss.clone());
+            let (phi, gamma) = fresh.matrices(dt);
+            let mut x = x0;
+            zoh.step(dt, &mut x, &u);
+            for i in 0..2 {
+                let want = phi[2 * i] * x0[0] + phi[2 * i + 1] * x0[1] + gamma[2 * i] * u[0] + gamma[2 * i + 1] * u[1];
+                assert!((x[i] - want).abs() < 1e-15, "dt {dt}, x[{i}]: {} vs {want}", x[i]);
+            }
+            assert!((x[0] - x0[0]).abs() > 1e-6, "the state moved");
+        }
+        // 1e-4 and 1.5e-4 alternate in the two entries; 0.02 evicts one.
+        assert_eq!(zoh.exponentials_computed(), 3);
+        // A grid's steps jitter in the last bits: they share one exponential.
+        let mut x = x0;
+        for k in 1..=1000 {
+            zoh.step(k as f64 / 1e4 - (k - 1) as f64 / 1e4, &mut x, &u);
+        }
+        assert_eq!(zoh.exponentials_computed(), 4);
     }
 
     /// The FLADRC paper's plant 1.639e4/(s² + 154.8 s + 2.242e4) under a unit
