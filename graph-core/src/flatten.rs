@@ -11,6 +11,9 @@ use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+mod includes;
+use includes::{IncludeError, Includes};
+
 /// Block types the loader and compiler treat specially.
 pub const SUBSYSTEM: &str = "subsystem";
 pub const INPORT: &str = "inport";
@@ -142,7 +145,7 @@ pub fn load_str(text: &str, file: Arc<str>, overrides: &[(String, String)]) -> R
         }
     };
     out.scopes = graph.scopes.iter().map(|s| s.evaluate(&number)).collect::<Result<_, _>>()?;
-    let mut includes = Includes { stack: vec![canonical(Path::new(&*file))], ..Includes::default() };
+    let mut includes = Includes::new(canonical(Path::new(&*file)));
     expand(&graph, "", scope, dir, &mut out, &mut includes)?;
     out.records = graph.record.clone();
     Ok(out)
@@ -514,78 +517,6 @@ fn load_subsystem(
     expand(&sub, &format!("{path}/"), sub_scope, sub_dir, out, includes)?;
     includes.stack.pop();
     Ok(sub_ports(&sub))
-}
-
-/// The subsystem files met while expanding: each is read and parsed once,
-/// and its flattened size is known before it is expanded, so an include
-/// chain that doubles at every level is refused at once rather than after
-/// building a million blocks.
-#[derive(Default)]
-struct Includes {
-    /// The chain of files being expanded (canonical paths), for cycles.
-    stack: Vec<PathBuf>,
-    parsed: HashMap<PathBuf, Arc<GraphFile>>,
-    /// Flattened block count per file (saturating).
-    sizes: HashMap<PathBuf, usize>,
-}
-
-enum IncludeError {
-    Read(std::io::Error),
-    Parse(Diagnostic),
-}
-
-impl Includes {
-    fn parse(&mut self, path: &Path, canon: &Path) -> Result<Arc<GraphFile>, IncludeError> {
-        if let Some(g) = self.parsed.get(canon) {
-            return Ok(g.clone());
-        }
-        let text = std::fs::read_to_string(path).map_err(IncludeError::Read)?;
-        let g = Arc::new(GraphFile::parse(&text, path.display().to_string().into()).map_err(IncludeError::Parse)?);
-        self.parsed.insert(canon.to_path_buf(), g.clone());
-        Ok(g)
-    }
-
-    /// How many blocks `g` (the file at `path`) flattens to; `None` when an
-    /// include below it cannot be read, parsed or is cyclic or too deep —
-    /// expanding it then reports that error at its position.
-    fn expanded_size(&mut self, g: &GraphFile, canon: &Path, path: &Path) -> Option<usize> {
-        if let Some(&n) = self.sizes.get(canon) {
-            return Some(n);
-        }
-        if self.stack.len() >= MAX_DEPTH || self.stack.iter().any(|p| p == canon) {
-            return None;
-        }
-        self.stack.push(canon.to_path_buf());
-        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        let mut total = 0usize;
-        for b in &g.blocks {
-            let n = if b.type_name == SUBSYSTEM {
-                let rel = yaml::lookup(&b.params, "file").and_then(|v| match &v.kind {
-                    Kind::Str(s) => Some(s.clone()),
-                    _ => None,
-                });
-                let sub = rel.and_then(|rel| {
-                    let p = dir.join(rel);
-                    let c = canonical(&p);
-                    let sub = self.parse(&p, &c).ok()?;
-                    self.expanded_size(&sub, &c, &p)
-                });
-                match sub {
-                    Some(n) => n,
-                    None => {
-                        self.stack.pop();
-                        return None;
-                    }
-                }
-            } else {
-                1
-            };
-            total = total.saturating_add(n);
-        }
-        self.stack.pop();
-        self.sizes.insert(canon.to_path_buf(), total);
-        Some(total)
-    }
 }
 
 /// Splits a command-line `NAME=VALUE`.
