@@ -73,6 +73,13 @@ fn fst_outside_the_linear_band_uses_a0_exactly() {
     // Han's fst (Python, recorded): a constant other than 8 in a0 gives −100.
     let f = fst(-1.0, 13.6, 100.0, 0.01, 0.01);
     assert!((f - (-94.51529845459615)).abs() < 1e-9, "fst = {f}");
+    // The same branch and the linear band with d = δ·h0 = 5, not 1 (at d = 1,
+    // d·d = d/d and h0·d = h0/d: cargo-mutants found those unasserted). The
+    // paper's δ = 1e4, h0 = 5h.
+    let f = fst(-0.01, 10.0, 1e4, 5e-4, 5e-4);
+    assert!((f - (-4384.471871911696)).abs() < 1e-9, "fst = {f}");
+    let f = fst(-0.001, 1.0, 1e4, 5e-4, 1e-4);
+    assert!((f - 1599.9999999999995).abs() < 1e-9, "fst = {f}");
 }
 
 #[test]
