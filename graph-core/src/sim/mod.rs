@@ -298,12 +298,7 @@ impl Simulator {
         let m = &mut self.model;
         for (i, block) in m.blocks.iter_mut().enumerate() {
             let slot = &m.slots[i];
-            let due = match slot.rate {
-                Rate::Continuous => true,
-                Rate::Constant => self.first,
-                Rate::Discrete(c) => self.clocks[c].hit,
-            };
-            if due {
+            if due(slot.rate, &self.clocks, self.first) {
                 let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
                 block.output(&mut io);
             }
@@ -316,12 +311,7 @@ impl Simulator {
         let m = &mut self.model;
         for &i in &self.updating {
             let slot = &m.slots[i];
-            let due = match slot.rate {
-                Rate::Continuous => true,
-                Rate::Constant => false,
-                Rate::Discrete(c) => self.clocks[c].hit,
-            };
-            if due {
+            if due(slot.rate, &self.clocks, false) {
                 let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
                 m.blocks[i].update(&mut io);
             }
@@ -502,6 +492,16 @@ impl Simulator {
             }
             self.advance()?;
         }
+    }
+}
+
+/// Whether a block of `rate` runs now: continuous ones always, discrete
+/// ones at their clock's hits, constant ones when `constant_too`.
+fn due(rate: Rate, clocks: &[Clock], constant_too: bool) -> bool {
+    match rate {
+        Rate::Continuous => true,
+        Rate::Constant => constant_too,
+        Rate::Discrete(c) => clocks[c].hit,
     }
 }
 
