@@ -156,3 +156,23 @@ fn exact_zoh_follows_a_pulse_train_with_off_grid_edges() {
     let err = max_error(&trace, "y", exact);
     assert!(err < 1e-12, "max error {err}");
 }
+
+/// Blocks that change only at events (steps, a pulse, a sum of them) are
+/// not re-run between events; at and after every edge they still read right.
+#[test]
+fn event_only_blocks_switch_exactly_at_their_events() {
+    let yaml = "simulation: { stop: 1.0, solver: { method: rk4, step: 0.1 } }\n\
+                blocks:\n  a: { type: step, at: 0.25 }\n  b: { type: step, at: 0.5, value: 2 }\n  \
+                p: { type: pulse, period: 0.3, duty: 0.5, amplitude: 10 }\n  \
+                s: { type: sum, signs: \"+++\" }\nwires: [a -> s.u1, b -> s.u2, p -> s.u3]\nrecord: [s]\n";
+    let trace = run(yaml);
+    let s = trace.column("s").expect("s recorded");
+    for (&t, &v) in trace.t().iter().zip(s) {
+        // High for the first half of each 0.3 s period (edges at k·0.3 and k·0.3 + 0.15).
+        let phase = t - ((t + 1e-12) / 0.3).floor() * 0.3;
+        let pulse = if phase < 0.15 - 1e-12 { 10.0 } else { 0.0 };
+        let want = f64::from(u8::from(t >= 0.25)) + 2.0 * f64::from(u8::from(t >= 0.5)) + pulse;
+        assert!((v - want).abs() < 1e-12, "t = {t}: s = {v}, expected {want}");
+    }
+    assert!(trace.t().contains(&0.25) && trace.t().contains(&0.15), "events are major steps");
+}

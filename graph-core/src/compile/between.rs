@@ -27,6 +27,9 @@ pub(crate) struct Between {
     pub held: Vec<usize>,
     /// Length of the integrated prefix of the state vector.
     pub n_integrated: usize,
+    /// Per block: its outputs change only at block events (a step source, a
+    /// sum of steps), so major steps without an event need not run it.
+    pub event_only: Vec<bool>,
 }
 
 /// Decides the plan and lays the states out: integrated blocks' first, held
@@ -49,6 +52,22 @@ pub(super) fn plan(model: &mut Model, piecewise: &[bool]) {
         for i in 0..n {
             if !constant[i] && piecewise[i] && !has_states(i) && drivers[i].iter().all(|&d| constant[d]) {
                 constant[i] = true;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    // Event-only: continuous, piecewise constant, and fed only by constant
+    // or event-only blocks (a source without inputs changes at its events).
+    let mut event_only = vec![false; n];
+    for _ in 0..n {
+        let mut changed = false;
+        for i in 0..n {
+            let fed = drivers[i].iter().all(|&d| model.meta[d].rate == Rate::Constant || event_only[d]);
+            if !event_only[i] && continuous(i) && constant[i] && fed {
+                event_only[i] = true;
                 changed = true;
             }
         }
@@ -95,7 +114,7 @@ pub(super) fn plan(model: &mut Model, piecewise: &[bool]) {
             held[i] = false;
         }
     };
-    let mut between = Between::default();
+    let mut between = Between { event_only, ..Between::default() };
     let mut next = 0;
     for i in 0..n {
         if minor[i] {

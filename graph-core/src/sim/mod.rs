@@ -153,6 +153,8 @@ pub struct Simulator {
     held: Vec<Held>,
     /// Blocks with an `update` to run (execution order).
     updating: Vec<usize>,
+    /// Whether this major step is at a block event (see `Between::event_only`).
+    at_event: bool,
 }
 
 /// A held LTI block: its exact transitions and its input at the last major step.
@@ -213,6 +215,7 @@ impl Simulator {
             held,
             between: model.between.clone(),
             updating: (0..model.blocks.len()).filter(|&i| model.blocks[i].updates()).collect(),
+            at_event: true,
             model,
         };
         sim.reset();
@@ -292,12 +295,17 @@ impl Simulator {
     }
 
     /// Runs `output` of every block due now, in execution order:
-    /// continuous blocks always, discrete blocks at their hits, constant
-    /// blocks on the first pass only.
+    /// continuous blocks always (those that change only at events, only
+    /// at events), discrete blocks at their hits, constant blocks on the
+    /// first pass only.
     fn sweep(&mut self) {
         let m = &mut self.model;
+        let skip_event_only = !self.first && !self.at_event;
         for (i, block) in m.blocks.iter_mut().enumerate() {
             let slot = &m.slots[i];
+            if skip_event_only && self.between.event_only[i] {
+                continue;
+            }
             if due(slot.rate, &self.clocks, self.first) {
                 let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
                 block.output(&mut io);
@@ -429,6 +437,7 @@ impl Simulator {
         }
         let hit = self.mark_hits();
         let block_event = self.t >= self.next_event - self.tol;
+        self.at_event = block_event;
         if block_event {
             self.next_event = self.earliest_event();
         }
