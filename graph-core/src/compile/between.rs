@@ -45,36 +45,15 @@ pub(super) fn plan(model: &mut Model, piecewise: &[bool]) {
     let is_continuous: Vec<bool> = model.meta.iter().map(|m| m.rate == Rate::Continuous).collect();
     let is_stateful: Vec<bool> = model.blocks.iter().map(|b| b.num_states() > 0).collect();
     let (continuous, has_states) = (|i: usize| is_continuous[i], |i: usize| is_stateful[i]);
-    // Least fixed point: a block is piecewise constant once all its drivers are.
-    let mut constant: Vec<bool> = (0..n).map(|i| !continuous(i)).collect();
-    loop {
-        let mut changed = false;
-        for i in 0..n {
-            if !constant[i] && piecewise[i] && !has_states(i) && drivers[i].iter().all(|&d| constant[d]) {
-                constant[i] = true;
-                changed = true;
-            }
-        }
-        if !changed {
-            break;
-        }
-    }
+    // A block is piecewise constant once all its drivers are.
+    let start: Vec<bool> = (0..n).map(|i| !continuous(i)).collect();
+    let constant = closure(start, |i, set| piecewise[i] && !has_states(i) && drivers[i].iter().all(|&d| set[d]));
     // Event-only: continuous, piecewise constant, and fed only by constant
     // or event-only blocks (a source without inputs changes at its events).
-    let mut event_only = vec![false; n];
-    for _ in 0..n {
-        let mut changed = false;
-        for i in 0..n {
-            let fed = drivers[i].iter().all(|&d| model.meta[d].rate == Rate::Constant || event_only[d]);
-            if !event_only[i] && continuous(i) && constant[i] && fed {
-                event_only[i] = true;
-                changed = true;
-            }
-        }
-        if !changed {
-            break;
-        }
-    }
+    let is_constant_rate: Vec<bool> = model.meta.iter().map(|m| m.rate == Rate::Constant).collect();
+    let event_only = closure(vec![false; n], |i, set| {
+        continuous(i) && constant[i] && drivers[i].iter().all(|&d| is_constant_rate[d] || set[d])
+    });
     let exact = model.sim.exact_lti && !model.sim.method.is_adaptive();
     let mut held: Vec<bool> = (0..n)
         .map(|i| {
@@ -134,6 +113,23 @@ pub(super) fn plan(model: &mut Model, piecewise: &[bool]) {
         next = relocate(model, i, next);
     }
     model.between = between;
+}
+
+/// The least set containing `set` and closed under `rule`: adds every `i`
+/// for which `rule(i, set)` holds until nothing changes.
+fn closure(mut set: Vec<bool>, rule: impl Fn(usize, &[bool]) -> bool) -> Vec<bool> {
+    loop {
+        let mut changed = false;
+        for i in 0..set.len() {
+            if !set[i] && rule(i, &set) {
+                set[i] = true;
+                changed = true;
+            }
+        }
+        if !changed {
+            return set;
+        }
+    }
 }
 
 /// Gives block `i` the states from `start` on; returns the next free index.
