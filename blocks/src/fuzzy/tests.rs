@@ -146,3 +146,52 @@ fn sugeno_is_a_weighted_average() {
     fis.eval(&[1.0], &mut y);
     assert_eq!(y[0], 3.0);
 }
+
+/// Negation, OR (max and probabilistic), sum aggregation of min implication
+/// and the empty case, against an independent transcription (Python/numpy,
+/// trimf and scikit-fuzzy's trapezoid centroid on 201 points; values
+/// recorded). Rules on a, b ∈ [−1, 1] (N, Z, P) to k ∈ [0, 1] (L, M, H):
+/// a is N and b is not P → L; a is Z or b is Z → M; a is P and b is P → H.
+/// At (−0.8, 0.7) the negated term binds rule 1 (1 − 0.7 < 0.8) and the OR
+/// of 0.2 and 0.3 differs between max and probor.
+#[test]
+fn negation_or_and_sum_aggregation_match_an_independent_transcription() {
+    let three = |lo: f64, hi: f64, names: &[&str]| uniform_triangles(lo, hi, names);
+    let var =
+        |n: &str, lo: f64, hi: f64, names: &[&str]| Variable { name: n.into(), lo, hi, terms: three(lo, hi, names) };
+    let rule = |antecedents: Vec<(usize, usize, bool)>, connective, term| Rule {
+        antecedents,
+        connective,
+        consequents: vec![(0, term)],
+    };
+    let rules = vec![
+        rule(vec![(0, 0, false), (1, 2, true)], Connective::And, 0),
+        rule(vec![(0, 1, false), (1, 1, false)], Connective::Or, 1),
+        rule(vec![(0, 2, false), (1, 2, false)], Connective::And, 2),
+    ];
+    let run = |methods: Methods, a: f64, b: f64| {
+        let inputs = vec![var("a", -1.0, 1.0, &["N", "Z", "P"]), var("b", -1.0, 1.0, &["N", "Z", "P"])];
+        let mut fis = Fis::new(inputs, vec![var("k", 0.0, 1.0, &["L", "M", "H"])], rules.clone(), methods, false);
+        let mut y = [f64::NAN];
+        fis.eval(&[a, b], &mut y);
+        y[0]
+    };
+    let m = Methods { resolution: 201, ..Default::default() };
+    let cases = [
+        (m, 0.46351351351351344),
+        (Methods { or: OrMethod::ProbOr, ..m }, 0.4723133716160792),
+        (Methods { aggregation: Aggregation::Sum, ..m }, 0.40490196078431384),
+    ];
+    for (methods, want) in cases {
+        let got = run(methods, -0.8, 0.7);
+        assert!((got - want).abs() < 1e-12, "{methods:?}: {got} vs {want}");
+    }
+    // No rule fires: MATLAB's convention, the middle of the output range.
+    let x = Variable { name: "x".into(), lo: 0.0, hi: 2.0, terms: vec![("A".into(), Mf::Tri(0.0, 0.5, 1.0))] };
+    let y = Variable { name: "y".into(), lo: 1.0, hi: 3.0, terms: vec![("B".into(), Mf::Tri(1.0, 2.0, 3.0))] };
+    let one = Rule { antecedents: vec![(0, 0, false)], connective: Connective::And, consequents: vec![(0, 0)] };
+    let mut fis = Fis::new(vec![x], vec![y], vec![one], Methods::default(), false);
+    let mut out = [f64::NAN];
+    fis.eval(&[1.5], &mut out);
+    assert_eq!(out[0], 2.0);
+}
