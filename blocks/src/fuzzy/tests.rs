@@ -186,6 +186,16 @@ fn negation_or_and_sum_aggregation_match_an_independent_transcription() {
         let got = run(methods, -0.8, 0.7);
         assert!((got - want).abs() < 1e-12, "{methods:?}: {got} vs {want}");
     }
+    // Sum aggregation of min implication where rules share a term: the
+    // paper's k1 table at (0.013, 0.047) fires NS twice and NM twice, so
+    // Σ_r min(w_r, μ) differs from min(Σ_r w_r, μ) (same transcription).
+    let sum = Methods { aggregation: Aggregation::Sum, ..Default::default() };
+    let got = eval(&mut paper_k1(sum), 0.013, 0.047);
+    assert!((got - (-0.09780946123521687)).abs() < 1e-12, "min/sum: {got}");
+    // PB, the last term (its support ends at the grid's end), mirrors NB.
+    let mut fis = paper_k1(Methods::default());
+    let (pb, nb) = (eval(&mut fis, -0.1, -0.1), eval(&mut fis, 0.1, 0.1));
+    assert!((pb + nb).abs() < 1e-15 && nb < -0.17, "PB {pb}, NB {nb}");
     // No rule fires: MATLAB's convention, the middle of the output range.
     let x = Variable { name: "x".into(), lo: 0.0, hi: 2.0, terms: vec![("A".into(), Mf::Tri(0.0, 0.5, 1.0))] };
     let y = Variable { name: "y".into(), lo: 1.0, hi: 3.0, terms: vec![("B".into(), Mf::Tri(1.0, 2.0, 3.0))] };
