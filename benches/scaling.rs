@@ -14,10 +14,13 @@ use std::hint::black_box;
 
 const STEPS: usize = 100;
 
+/// The settings and the source every generated graph starts with.
+const HEADER: &str = "simulation: { stop: 1.0, solver: { method: rk4, step: 0.01 } }\nblocks:\n  u: { type: sine }\n";
+
 /// `u → g1 → g2 → … → gn → integrator`.
 fn chain(n: usize) -> String {
-    let mut g = String::from("simulation: { stop: 1.0, solver: { method: rk4, step: 0.01 } }\nblocks:\n");
-    g.push_str("  u: { type: sine }\n  x: { type: integrator }\n");
+    let mut g = String::from(HEADER);
+    g.push_str("  x: { type: integrator }\n");
     for i in 1..=n {
         writeln!(g, "  g{i}: {{ type: gain, k: 1.0 }}").unwrap();
     }
@@ -31,8 +34,7 @@ fn chain(n: usize) -> String {
 
 /// `u → {g1 … gn}`, each gain into its own integrator.
 fn fan_out(n: usize) -> String {
-    let mut g = String::from("simulation: { stop: 1.0, solver: { method: rk4, step: 0.01 } }\nblocks:\n");
-    g.push_str("  u: { type: sine }\n");
+    let mut g = String::from(HEADER);
     for i in 1..=n {
         writeln!(g, "  g{i}: {{ type: gain, k: 1.0 }}\n  x{i}: {{ type: integrator }}").unwrap();
     }

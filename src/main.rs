@@ -201,7 +201,11 @@ fn check(graph: &Path, sets: &[String]) -> Result<(), Failure> {
     println!("execution order:");
     let width = model.meta.iter().map(|m| m.name.len()).max().unwrap_or(0);
     for (i, m) in model.meta.iter().enumerate() {
-        let zoh = if m.exact_zoh { format!(", exact ZOH at {}", model.sim.method.max_step()) } else { String::new() };
+        let zoh = if m.exact_zoh {
+            format!(", exact ZOH at {}", ctlgraph::record::Number(model.sim.method.max_step()))
+        } else {
+            String::new()
+        };
         println!("  {:>3}  {:<width$}  {:<26}  {}{zoh}", i + 1, m.name, m.type_name, m.sample_time);
     }
     let solver = model.sim.method;

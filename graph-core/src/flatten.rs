@@ -398,16 +398,13 @@ fn expand(
     for b in &g.blocks {
         let path = format!("{prefix}{}", b.name);
         if b.type_name != SUBSYSTEM {
+            // Includes are sized before they expand (`load_subsystem`), so
+            // this is reached by blocks written out one by one.
             if out.blocks.len() >= MAX_BLOCKS {
-                let d = Diagnostic::at(
+                return Err(Diagnostic::at(
                     &b.pos,
                     format!("the graph expands to more than {MAX_BLOCKS} blocks (here, at `{path}`)"),
-                );
-                return Err(if prefix.is_empty() && out.subsystems.is_empty() {
-                    d
-                } else {
-                    d.with_hint("subsystems included many times over multiply: look for an include chain that doubles")
-                });
+                ));
             }
             out.blocks.push(FlatBlock { path, spec: b.clone(), scope: scope.clone(), dir: dir.clone() });
             continue;
