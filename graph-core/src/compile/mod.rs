@@ -285,13 +285,13 @@ impl Model {
     }
 
     /// The block owning signal `offset` and the name of its output port.
-    pub fn signal_owner(&self, offset: usize) -> Option<(&BlockMeta, &str)> {
-        self.meta.iter().find_map(|m| {
+    pub fn signal_owner(&self, offset: usize) -> Option<(usize, &str)> {
+        self.meta.iter().enumerate().find_map(|(i, m)| {
             m.outputs.clone().find_map(|p| {
                 let port = self.out_ports[p];
                 (port.offset..port.offset + port.width)
                     .contains(&offset)
-                    .then(|| (m, m.output_names[p - m.outputs.start].as_str()))
+                    .then(|| (i, m.output_names[p - m.outputs.start].as_str()))
             })
         })
     }

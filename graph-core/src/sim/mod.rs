@@ -22,39 +22,39 @@ use std::fmt;
 /// Why a run stopped early.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SimError {
-    /// A signal or state became NaN or infinite.
-    NonFinite {
-        t: f64,
-        block: String,
-        what: String,
-        value: f64,
-    },
-    Solver {
-        t: f64,
-        error: SolverError,
-    },
+    /// A signal or state became NaN or infinite; `inputs` are the block's
+    /// input values at that moment (vector elements as `u[k]`).
+    NonFinite { t: f64, block: String, what: String, value: f64, inputs: Vec<(String, f64)> },
+    /// The solver gave up; `culprit` is the block and state index that
+    /// forced it, when the solver can tell (the state whose error estimate
+    /// kept the step shrinking).
+    Solver { t: f64, error: SolverError, culprit: Option<(String, usize)> },
     /// Time stopped advancing: a block asks for major steps closer together
     /// than floating point can tell apart.
-    Stalled {
-        t: f64,
-        block: String,
-    },
+    Stalled { t: f64, block: String },
     /// A block's zero crossings kept firing at (nearly) one instant: the
     /// model chatters (a Zeno or sliding behaviour).
-    Chattering {
-        t: f64,
-        block: String,
-        what: String,
-    },
+    Chattering { t: f64, block: String, what: String },
 }
 
 impl fmt::Display for SimError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            SimError::NonFinite { t, block, what, value } => {
-                write!(f, "t = {t}: block `{block}`: {what} is {value}")
+            SimError::NonFinite { t, block, what, value, inputs } => {
+                write!(f, "t = {t}: block `{block}`: {what} is {value}")?;
+                if !inputs.is_empty() {
+                    let shown: Vec<String> =
+                        inputs.iter().take(MAX_INPUTS_SHOWN).map(|(n, v)| format!("{n} = {v}")).collect();
+                    let more = inputs.len().saturating_sub(MAX_INPUTS_SHOWN);
+                    let more = if more > 0 { format!(" and {more} more") } else { String::new() };
+                    write!(f, " (inputs: {}{more})", shown.join(", "))?;
+                }
+                Ok(())
             }
-            SimError::Solver { t, error } => write!(f, "t = {t}: solver: {error}"),
+            SimError::Solver { t, error, culprit: None } => write!(f, "t = {t}: solver: {error}"),
+            SimError::Solver { t, error, culprit: Some((block, k)) } => {
+                write!(f, "t = {t}: solver: {error}; the step is forced down by block `{block}` (state {k})")
+            }
             SimError::Stalled { t, block } => write!(
                 f,
                 "t = {t}: time does not advance: block `{block}` asks for steps closer than the time resolution \
@@ -71,6 +71,9 @@ impl fmt::Display for SimError {
 }
 
 impl std::error::Error for SimError {}
+
+/// Input values a non-finite message lists (a wide vector input is cut short).
+const MAX_INPUTS_SHOWN: usize = 8;
 
 /// The times k·h of a grid with step h. When h is the reciprocal of a
 /// whole number n (0.01, 1e-4, 0.5), k/n is used: division is correctly
@@ -276,6 +279,21 @@ impl Simulator {
         &self.watch.warnings
     }
 
+    /// About how many major steps the run takes: the fixed-step grid plus
+    /// the sample hits that fall between its points. For the adaptive
+    /// methods, whose steps `max_step` bounds, it is a floor.
+    pub fn expected_major_steps(&self) -> f64 {
+        let mut n = self.stop / self.integ.method().max_step();
+        for c in &self.clocks {
+            let ratio = c.grid.step / self.grid_step;
+            let on_grid = self.grid_step > 0.0 && ratio >= 0.5 && (ratio - ratio.round()).abs() <= 1e-9 * ratio;
+            if !on_grid {
+                n += (self.stop - c.offset).max(0.0) / c.grid.step;
+            }
+        }
+        n.ceil()
+    }
+
     /// Whether the run has reached its stop time.
     pub fn finished(&self) -> bool {
         self.t >= self.stop - self.tol && !self.first
@@ -339,16 +357,45 @@ impl Simulator {
         if !all_finite(&self.signals)
             && let Some(k) = self.signals.iter().position(|v| !v.is_finite())
         {
-            let (block, port) = self.model.signal_owner(k).map_or(("?".to_string(), "?"), |(m, p)| (m.name.clone(), p));
-            let diagnosis =
-                self.model.meta.iter().position(|m| m.name == block).and_then(|i| self.model.blocks[i].diagnose());
-            let what = match diagnosis {
+            let value = self.signals[k];
+            let Some((i, port)) = self.model.signal_owner(k) else {
+                return Err(SimError::NonFinite {
+                    t: self.t,
+                    block: "?".into(),
+                    what: "a signal".into(),
+                    value,
+                    inputs: vec![],
+                });
+            };
+            let what = match self.model.blocks[i].diagnose() {
                 Some(why) => format!("output `{port}`: {why}"),
                 None => format!("output `{port}`"),
             };
-            return Err(SimError::NonFinite { t: self.t, block, what, value: self.signals[k] });
+            return Err(self.non_finite(self.t, i, what, value));
         }
         Ok(())
+    }
+
+    /// The error for block `i` having produced `value` (not finite) as
+    /// `what`, with its inputs as they are now.
+    fn non_finite(&self, t: f64, i: usize, what: String, value: f64) -> SimError {
+        let meta = &self.model.meta[i];
+        let mut inputs = Vec::new();
+        for (name, p) in meta.input_names.iter().zip(meta.inputs.clone()) {
+            let port = self.model.in_ports[p];
+            let values = &self.signals[port.offset..port.offset + port.width];
+            match values {
+                [v] => inputs.push((name.clone(), *v)),
+                _ => inputs.extend(values.iter().enumerate().map(|(k, v)| (format!("{name}[{k}]"), *v))),
+            }
+        }
+        SimError::NonFinite { t, block: meta.name.clone(), what, value, inputs }
+    }
+
+    /// The block owning state `k`, and the state's index within the block.
+    fn state_owner(&self, k: usize) -> Option<(usize, usize)> {
+        let i = self.model.meta.iter().position(|m| m.states.contains(&k))?;
+        Some((i, k - self.model.meta[i].states.start))
     }
 
     /// Blocks with zero crossings may reset their states at a major step;
@@ -396,15 +443,19 @@ impl Simulator {
                 // A state that blew up inside the step: name its block, as a
                 // blow-up at a major step does.
                 Err(SolverError::NonFinite { t, state: Some(k) }) => {
-                    let owner = self.model.meta.iter().find(|m| m.states.contains(&k));
-                    return Err(SimError::NonFinite {
-                        t,
-                        block: owner.map_or("?".to_string(), |m| m.name.clone()),
-                        what: format!("state {} (inside the solver's step)", owner.map_or(k, |m| k - m.states.start)),
-                        value: f64::NAN,
+                    let what = |j: usize| format!("state {j} (inside the solver's step)");
+                    return Err(match self.state_owner(k) {
+                        Some((i, j)) => self.non_finite(t, i, what(j), f64::NAN),
+                        None => {
+                            SimError::NonFinite { t, block: "?".into(), what: what(k), value: f64::NAN, inputs: vec![] }
+                        }
                     });
                 }
-                Err(error) => return Err(SimError::Solver { t: t0, error }),
+                Err(error) => {
+                    let culprit = error.state().and_then(|k| self.state_owner(k));
+                    let culprit = culprit.map(|(i, j)| (self.model.meta[i].name.clone(), j));
+                    return Err(SimError::Solver { t: t0, error, culprit });
+                }
             }
         };
         let event = self.watch.locate(&mut sys, &mut self.integ, t0, t_new, x);
@@ -447,12 +498,16 @@ impl Simulator {
         if !all_finite(&self.x)
             && let Some(k) = self.x.iter().position(|v| !v.is_finite())
         {
-            let owner = self.model.meta.iter().find(|m| m.states.contains(&k)).map_or("?", |m| m.name.as_str());
-            return Err(SimError::NonFinite {
-                t: self.t,
-                block: owner.to_string(),
-                what: format!("state {}", k),
-                value: self.x[k],
+            let value = self.x[k];
+            return Err(match self.state_owner(k) {
+                Some((i, j)) => self.non_finite(self.t, i, format!("state {j}"), value),
+                None => SimError::NonFinite {
+                    t: self.t,
+                    block: "?".into(),
+                    what: format!("state {k}"),
+                    value,
+                    inputs: vec![],
+                },
             });
         }
         self.stalled = if self.t > t0 { 0 } else { self.stalled + 1 };
@@ -493,11 +548,26 @@ impl Simulator {
     /// Runs to the stop time, handing the signals to `sink` at every major
     /// step (including t = 0 and the stop time).
     pub fn run(&mut self, sink: &mut dyn FnMut(f64, &[f64])) -> Result<RunStats, SimError> {
+        self.run_while(&mut |t, signals| {
+            sink(t, signals);
+            true
+        })?;
+        Ok(self.stats())
+    }
+
+    /// Like [`Simulator::run`], but `sink` may end the run early by
+    /// returning `false` (an interrupt, a step or wall-time budget): the
+    /// run then stops after that major step. Returns whether the stop time
+    /// was reached.
+    pub fn run_while(&mut self, sink: &mut dyn FnMut(f64, &[f64]) -> bool) -> Result<bool, SimError> {
         loop {
             self.outputs()?;
-            sink(self.t, &self.signals);
+            let go_on = sink(self.t, &self.signals);
             if self.finished() {
-                return Ok(self.stats());
+                return Ok(true);
+            }
+            if !go_on {
+                return Ok(false);
             }
             self.advance()?;
         }

@@ -123,8 +123,10 @@ pub struct Stats {
 /// Why integration could not continue.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SolverError {
-    /// The adaptive step shrank below what floating point can resolve at `t`.
-    StepTooSmall { t: f64, step: f64 },
+    /// The adaptive step shrank below what floating point can resolve at
+    /// `t`; `state` is the component with the largest scaled error at the
+    /// last rejected step (the one that forced the step down), if any.
+    StepTooSmall { t: f64, step: f64, state: Option<usize> },
     /// The error estimate was not finite (the state blew up) at `t`;
     /// `state` is the first component that was not.
     NonFinite { t: f64, state: Option<usize> },
@@ -135,7 +137,7 @@ pub enum SolverError {
 impl fmt::Display for SolverError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            SolverError::StepTooSmall { t, step } => write!(
+            SolverError::StepTooSmall { t, step, .. } => write!(
                 f,
                 "step size {step:e} too small at t = {t}: the system is too stiff or discontinuous for the tolerances"
             ),
@@ -147,6 +149,16 @@ impl fmt::Display for SolverError {
 }
 
 impl std::error::Error for SolverError {}
+
+impl SolverError {
+    /// The state component the error points at, when there is one.
+    pub fn state(&self) -> Option<usize> {
+        match *self {
+            SolverError::StepTooSmall { state, .. } | SolverError::NonFinite { state, .. } => state,
+            SolverError::Singular { .. } => None,
+        }
+    }
+}
 
 // Dormand–Prince 5(4) tableau (Dormand & Prince 1980; Hairer, Nørsett &
 // Wanner, Solving ODEs I, table II.5.2).
@@ -202,15 +214,15 @@ struct Tolerance {
 /// Fits a trial step `h` from `t` to the limit: it lands exactly on
 /// `t_limit` when it reaches it, or nearly (a sliver of a step left over
 /// would waste a whole step later). Returns whether it lands and where the
-/// step ends.
-fn trial_step(t: f64, t_limit: f64, h: &mut f64) -> Result<(bool, f64), SolverError> {
+/// step ends. `worst` is the component to blame if the step is too small.
+fn trial_step(t: f64, t_limit: f64, h: &mut f64, worst: Option<usize>) -> Result<(bool, f64), SolverError> {
     let span = t_limit - t;
     let landing = *h >= span * (1.0 - 1e-9) || span - *h < 0.01 * *h;
     if landing {
         *h = span;
     }
     if t + *h == t {
-        return Err(SolverError::StepTooSmall { t, step: *h });
+        return Err(SolverError::StepTooSmall { t, step: *h, state: worst });
     }
     Ok((landing, if landing { t_limit } else { t + *h }))
 }
@@ -223,14 +235,19 @@ fn next_step(h: f64, factor: f64, max_step: f64, landed: bool, previous: f64) ->
     if landed { proposal.max(previous) } else { proposal }
 }
 
-/// RMS of `err` scaled by `atol + rtol·max(|a|, |b|)` per component.
-fn scaled_rms(err: impl Iterator<Item = f64>, a: &[f64], b: &[f64], rtol: f64, atol: f64) -> f64 {
-    let mut sum = 0.0;
+/// RMS of `err` scaled by `atol + rtol·max(|a|, |b|)` per component, and
+/// the component with the largest scaled error.
+fn scaled_rms(err: impl Iterator<Item = f64>, a: &[f64], b: &[f64], rtol: f64, atol: f64) -> (f64, usize) {
+    let (mut sum, mut largest, mut worst) = (0.0, 0.0, 0);
     for (i, e) in err.enumerate() {
         let scale = atol + rtol * a[i].abs().max(b[i].abs());
-        sum += (e / scale) * (e / scale);
+        let r = (e / scale) * (e / scale);
+        sum += r;
+        if r > largest {
+            (largest, worst) = (r, i);
+        }
     }
-    (sum / a.len() as f64).sqrt()
+    ((sum / a.len() as f64).sqrt(), worst)
 }
 
 /// A stepper with preallocated stage buffers for a system of fixed size.
@@ -243,6 +260,10 @@ pub struct Integrator {
     h_next: f64,
     /// `k[0]` holds `f(t, x)` from the last accepted step (first same as last).
     fsal_valid: bool,
+    /// The component with the largest scaled error at the last error
+    /// estimate or failed Newton iteration: when the step collapses, the
+    /// state that drove it there.
+    worst: Option<usize>,
     stats: Stats,
     /// The last step, for dense output: its start state and time, its length.
     x0: Vec<f64>,
@@ -264,6 +285,7 @@ impl Integrator {
             x_new: vec![0.0; n],
             h_next: 0.0,
             fsal_valid: false,
+            worst: None,
             stats: Stats::default(),
             x0: vec![0.0; n],
             t0: 0.0,
@@ -286,6 +308,7 @@ impl Integrator {
     pub fn reset(&mut self) {
         self.h_next = 0.0;
         self.fsal_valid = false;
+        self.worst = None;
         self.stats = Stats::default();
         self.h = 0.0;
         if let Some(w) = &mut self.implicit {
@@ -457,7 +480,7 @@ impl Integrator {
         }
         let mut h = self.h_next.min(max_step);
         loop {
-            let (landing, t_new) = trial_step(t, t_limit, &mut h)?;
+            let (landing, t_new) = trial_step(t, t_limit, &mut h, self.worst)?;
             self.stage(x, h, &[(0, A21)]);
             self.eval(sys, 1, t + C2 * h, true, x);
             self.stage(x, h, &[(0, A31), (1, A32)]);
@@ -474,7 +497,7 @@ impl Integrator {
             sys.derivatives(t_new, &self.x_new, &mut self.k[6]);
 
             let k = &self.k;
-            let err = scaled_rms(
+            let (err, largest) = scaled_rms(
                 (0..x.len()).map(|i| {
                     h * (E1 * k[0][i] + E3 * k[2][i] + E4 * k[3][i] + E5 * k[4][i] + E6 * k[5][i] + E7 * k[6][i])
                 }),
@@ -487,6 +510,7 @@ impl Integrator {
                 let state = (0..x.len()).find(|&i| !self.x_new[i].is_finite() || !self.k[6][i].is_finite());
                 return Err(SolverError::NonFinite { t, state });
             }
+            self.worst = Some(largest);
             if err <= 1.0 {
                 let factor = if err == 0.0 { 5.0 } else { (0.9 * err.powf(-0.2)).clamp(0.2, 5.0) };
                 self.h_next = next_step(h, factor, max_step, landing, self.h_next);

@@ -132,7 +132,7 @@ impl Integrator {
         }
         let mut h = self.h_next.min(max_step);
         loop {
-            let (landing, t_new) = trial_step(t, t_limit, &mut h)?;
+            let (landing, t_new) = trial_step(t, t_limit, &mut h, self.worst)?;
             if w.lin.lu_h != h && !factor(&mut self.stats, &mut w.lin, h) {
                 return Err(SolverError::Singular { t });
             }
@@ -143,7 +143,7 @@ impl Integrator {
             }
             let mut converged =
                 newton(&mut self.stats, sys, &mut w.lin, t + GAMMA * h, h, &mut w.z, &mut w.fz, &w.rhs, rtol, atol);
-            if converged {
+            if converged.is_ok() {
                 // BDF2 stage from the line through (t, x) and (t + γh, z).
                 let a = 1.0 / (GAMMA * (2.0 - GAMMA));
                 let b = (1.0 - GAMMA) * (1.0 - GAMMA) * a;
@@ -153,7 +153,8 @@ impl Integrator {
                 }
                 converged = newton(&mut self.stats, sys, &mut w.lin, t_new, h, &mut w.y, &mut w.f1, &w.rhs, rtol, atol);
             }
-            if !converged {
+            if let Err(unsettled) = converged {
+                self.worst = Some(unsettled);
                 self.stats.newton_failures += 1;
                 if w.lin.jac_fresh {
                     h *= 0.25;
@@ -169,11 +170,12 @@ impl Integrator {
                     h * ERR * (w.f0[i] / GAMMA - w.fz[i] / (GAMMA * (1.0 - GAMMA)) + w.f1[i] / (1.0 - GAMMA));
             }
             w.lin.lu.solve(&mut w.lin.delta);
-            let err = scaled_rms(w.lin.delta.iter().copied(), x, &w.y, rtol, atol);
+            let (err, largest) = scaled_rms(w.lin.delta.iter().copied(), x, &w.y, rtol, atol);
             if !err.is_finite() {
                 let state = (0..x.len()).find(|&i| !w.y[i].is_finite() || !w.lin.delta[i].is_finite());
                 return Err(SolverError::NonFinite { t, state });
             }
+            self.worst = Some(largest);
             if err <= 1.0 {
                 let factor = if err == 0.0 { 5.0 } else { (0.9 * err.powf(-1.0 / 3.0)).clamp(0.2, 5.0) };
                 // Keep the step (and its LU) when it would grow only a little.
@@ -194,7 +196,8 @@ impl Integrator {
 }
 
 /// Simplified Newton for `v − d·h·f(tv, v) = rhs` from the guess in `v`.
-/// On convergence `fv` holds f at the final `v`.
+/// On convergence `fv` holds f at the final `v`; on failure the error is the
+/// component with the largest scaled update (the one that did not settle).
 #[allow(clippy::too_many_arguments)]
 fn newton(
     stats: &mut Stats,
@@ -207,8 +210,8 @@ fn newton(
     rhs: &[f64],
     rtol: f64,
     atol: f64,
-) -> bool {
-    let mut previous = f64::INFINITY;
+) -> Result<(), usize> {
+    let (mut previous, mut unsettled) = (f64::INFINITY, 0);
     for iteration in 0..MAX_NEWTON {
         stats.evaluations += 1;
         sys.derivatives(tv, v, fv);
@@ -216,9 +219,9 @@ fn newton(
             lin.delta[i] = rhs[i] - v[i] + D * h * fv[i];
         }
         lin.lu.solve(&mut lin.delta);
-        let norm = scaled_rms(lin.delta.iter().copied(), v, v, rtol, atol);
+        let (norm, worst) = scaled_rms(lin.delta.iter().copied(), v, v, rtol, atol);
         if !norm.is_finite() {
-            return false;
+            return Err(lin.delta.iter().position(|d| !d.is_finite()).unwrap_or(worst));
         }
         for i in 0..v.len() {
             v[i] += lin.delta[i];
@@ -229,18 +232,19 @@ fn newton(
         } else {
             let rate = norm / previous;
             if rate >= 0.9 {
-                return false;
+                return Err(worst);
             }
             norm * rate / (1.0 - rate) <= NEWTON_TOL
         };
         if done {
             stats.evaluations += 1;
             sys.derivatives(tv, v, fv);
-            return true;
+            return Ok(());
         }
         previous = norm;
+        unsettled = worst;
     }
-    false
+    Err(unsettled)
 }
 
 /// Forward-difference Jacobian of f at (t, x), from `w.f0 = f(t, x)`.
