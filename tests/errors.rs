@@ -338,6 +338,29 @@ fn data_files_must_be_regular_finite_and_interpolable() {
     std::fs::write(&csv, "t,y\n0,-1e308\n1,1e308\n").unwrap();
     let d = error(&graph(csv.to_str().unwrap()));
     assert!(d.to_string().contains("points 1 and 2 are too far apart to interpolate"), "{d}");
+    // Read a row at a time: the first malformed row ends it, with its
+    // number, however much follows (here 300 MiB of a sparse file).
+    let long = dir.path().join("long.csv");
+    std::fs::write(&long, "t,y\n0,1\n0.1,2\n0.2,x\n").unwrap();
+    std::fs::OpenOptions::new().append(true).open(&long).unwrap().set_len(300 << 20).unwrap();
+    let with_limit = |file: &std::path::Path, mib: u32| {
+        format!("blocks:\n  s: {{ type: from_csv, file: \"{}\", column: y, max_file_mib: {mib} }}\n", file.display())
+    };
+    let d = error(&with_limit(&long, 400));
+    assert!(d.to_string().contains("long.csv` row 4: `y` is `x`, not a number"), "{d}");
+    // Above the limit (256 MiB by default, `max_file_mib` to change it):
+    // refused before reading, with the way out.
+    let d = error(&graph(long.to_str().unwrap()));
+    assert!(
+        d.to_string().contains("is 300 MiB, above the limit of 256 MiB for data files (raise `max_file_mib`"),
+        "{d}"
+    );
+    let small = dir.path().join("small.csv");
+    std::fs::write(&small, "t,y\n0,1\n1,2\n").unwrap();
+    std::fs::OpenOptions::new().append(true).open(&small).unwrap().set_len((1 << 20) + 1).unwrap();
+    let d = error(&with_limit(&small, 1));
+    assert!(d.to_string().contains("is 2 MiB, above the limit of 1 MiB"), "{d}");
+    assert!(d.to_string().contains("max_file_mib"), "the key is named: {d}");
 }
 
 #[test]

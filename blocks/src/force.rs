@@ -109,6 +109,7 @@ pub const TYPES: &[BlockType] = &[
             param("profile_x", None, "table breakpoints (instead of `profile`)"),
             param("profile_z", None, "table heights"),
             param("profile_file", None, "CSV with columns x and z (instead of `profile`)"),
+            crate::tables::MAX_FILE_MIB,
             param("stiffness", None, "k_e [N per length unit]"),
             param("damping", Some("0"), "c_e [N per (length unit/s)]"),
             param("mu", Some("0"), "Coulomb friction coefficient"),
@@ -411,7 +412,8 @@ fn build_profile(p: &mut Params) -> Result<Profile, Diagnostic> {
     }
     if p.has("profile_file") {
         let path = p.path("profile_file")?;
-        let (xs, zs) = crate::tables::read_columns(&path, "x", "z").map_err(|m| p.error("profile_file", m))?;
+        let limit = crate::tables::data_file_limit(p)?;
+        let (xs, zs) = crate::tables::read_columns(&path, "x", "z", limit).map_err(|m| p.error("profile_file", m))?;
         let table = crate::tables::Table::new(xs, zs, outside).map_err(|m| p.error("profile_file", m))?;
         return Ok(Profile::Table(table));
     }

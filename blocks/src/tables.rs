@@ -2,7 +2,7 @@
 //! both by linear interpolation.
 
 use crate::{SAMPLE_TIME_CONTINUOUS, SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, Y_SCALAR, param};
-use ctlgraph_core::registry::{BlockType, Built};
+use ctlgraph_core::registry::{BlockType, Built, ParamDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 
 pub const TYPES: &[BlockType] = &[
@@ -36,6 +36,7 @@ pub const TYPES: &[BlockType] = &[
             param("column", None, "header of the value column"),
             param("time", Some("t"), "header of the time column"),
             param("extrapolation", Some("hold"), "hold | linear | zero"),
+            MAX_FILE_MIB,
             SAMPLE_TIME_CONTINUOUS,
             crate::ACTIVE,
         ],
@@ -162,30 +163,48 @@ fn build_from_csv(p: &mut Params) -> Result<Built, Diagnostic> {
         "zero" => Outside::Zero,
         _ => Outside::Clamp,
     };
-    let (ts, ys) = read_columns(&path, time, column).map_err(|m| p.error("file", m))?;
+    let limit = data_file_limit(p)?;
+    let (ts, ys) = read_columns(&path, time, column, limit).map_err(|m| p.error("file", m))?;
     let table = Table::new(ts, ys, outside).map_err(|m| p.error("file", format!("`{}`: {m}", path.display())))?;
     let st = p.sample_time(SampleTime::Continuous)?;
     crate::sources::windowed(p, Built::new(Series(table), Interface::new(st).output("y", Width::Fixed(1))))
 }
 
-/// The largest data file a block reads (256 MiB): a CSV that size holds
-/// some ten million rows; anything larger is more likely a wrong path.
-pub const MAX_DATA_FILE: u64 = 256 << 20;
+/// The largest data file a block reads by default, in MiB: a CSV of 256 MiB
+/// holds some ten million rows; anything larger is more likely a wrong
+/// path. A block's `max_file_mib` raises it.
+pub const MAX_DATA_FILE_MIB: usize = 256;
 
-/// Reads two columns by header name; errors name the file, row and column.
-/// Only regular files up to [`MAX_DATA_FILE`] are read (not a FIFO or a
+/// The `max_file_mib` parameter of the blocks that read a data file.
+pub(crate) const MAX_FILE_MIB: ParamDoc =
+    param("max_file_mib", Some("256"), "largest data file read, in MiB (a larger file is refused)");
+
+/// The size limit of a block's data file in bytes, from `max_file_mib`
+/// (at most 1 TiB).
+pub(crate) fn data_file_limit(p: &mut Params) -> Result<u64, Diagnostic> {
+    Ok((p.count_or("max_file_mib", MAX_DATA_FILE_MIB, 1 << 20)? as u64) << 20)
+}
+
+/// Reads two columns by header name, a row at a time; errors name the
+/// file, row and column, and the first malformed row ends the reading.
+/// Only regular files up to `limit` bytes are read (not a FIFO or a
 /// device such as /dev/zero, which never end).
-pub(crate) fn read_columns(path: &std::path::Path, time: &str, column: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
+pub(crate) fn read_columns(
+    path: &std::path::Path,
+    time: &str,
+    column: &str,
+    limit: u64,
+) -> Result<(Vec<f64>, Vec<f64>), String> {
     let shown = path.display();
     let meta = std::fs::metadata(path).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
     if !meta.is_file() {
         return Err(format!("`{shown}` is not a regular file (a device, FIFO or folder): give a CSV file"));
     }
-    if meta.len() > MAX_DATA_FILE {
+    if meta.len() > limit {
         return Err(format!(
-            "`{shown}` is {} MiB, above the limit of {} MiB for data files",
-            meta.len() >> 20,
-            MAX_DATA_FILE >> 20
+            "`{shown}` is {} MiB, above the limit of {} MiB for data files (raise `max_file_mib` if it is the right file)",
+            meta.len().div_ceil(1 << 20),
+            limit >> 20
         ));
     }
     let mut reader = csv::Reader::from_path(path).map_err(|e| format!("cannot read `{shown}`: {e}"))?;

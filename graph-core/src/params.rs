@@ -178,7 +178,6 @@ impl<'a> Params<'a> {
         }
     }
 
-    /// A positive whole number.
     /// A whole number from 1 to `max`: every size-like parameter has a
     /// stated bound, checked before anything is allocated.
     pub fn count_or(&mut self, key: &str, default: usize, max: usize) -> Result<usize, Diagnostic> {
