@@ -1,17 +1,18 @@
 //! The `ctlgraph` command line. Exit codes: 0 success; 1 the run failed;
 //! 2 the input is invalid (file, YAML, schema, graph, arguments).
 
+mod interrupt;
 mod progress;
+mod run_cmd;
 mod sweep_cmd;
 
 use clap::{Parser, Subcommand};
 use ctlgraph::prop::{PropConfig, PropOutcome, Vary};
-use ctlgraph::record::{CsvFile, Recorder, Trace, write_atomic};
-use ctlgraph::report::{RunInfo, to_json};
 use ctlgraph::suite::Failure;
 use ctlgraph_core::flatten::parse_set;
 use ctlgraph_core::{Diagnostic, Model, Simulator};
-use progress::{CaseProgress, Progress};
+use progress::CaseProgress;
+use run_cmd::RunOptions;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -64,6 +65,12 @@ enum Command {
         /// Override `simulation.seed` (noise realisations).
         #[arg(long)]
         seed: Option<u64>,
+        /// End the run after this many major steps (exit 1; the outputs hold what was simulated).
+        #[arg(long, value_name = "N")]
+        max_steps: Option<u64>,
+        /// End the run after this many seconds of wall time (exit 1; the outputs hold what was simulated).
+        #[arg(long, value_name = "SECONDS")]
+        max_wall: Option<f64>,
     },
     /// Run every graph with `checks:` under the given files or folders.
     #[command(after_help = "Example:\n  ctlgraph test graphs/tutorial graphs/fladrc/compare.yaml")]
@@ -140,11 +147,20 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    interrupt::quiet_on_closed_pipe();
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run { graph, out, plot, sets, stop_time, report, seed } => run(
+        Command::Run { graph, out, plot, sets, stop_time, report, seed, max_steps, max_wall } => run_cmd::run(
             &graph,
-            RunOptions { out: out.as_deref(), plot: plot.as_deref(), stop_time, report: report.as_deref(), seed },
+            RunOptions {
+                out: out.as_deref(),
+                plot: plot.as_deref(),
+                stop_time,
+                report: report.as_deref(),
+                seed,
+                max_steps,
+                max_wall,
+            },
             &sets,
         ),
         Command::Test { paths } => test(paths),
@@ -172,6 +188,10 @@ fn main() -> ExitCode {
         Err(Failure::Run(message)) => {
             eprintln!("error: {message}");
             ExitCode::from(1)
+        }
+        Err(Failure::Interrupted(message)) => {
+            eprintln!("{message}");
+            ExitCode::from(130)
         }
     }
 }
@@ -220,6 +240,12 @@ fn check(graph: &Path, sets: &[String]) -> Result<(), Failure> {
         solver.name(),
         ctlgraph::record::Number(model.sim.stop)
     );
+    let sim = Simulator::new(model, None);
+    let floor = if sim.method().is_adaptive() { "at least" } else { "about" };
+    println!("{floor} {} major steps to the stop time", ctlgraph::record::Number(sim.expected_major_steps()));
+    if let Some(w) = run_cmd::long_run_warning(&sim) {
+        println!("warning: {w}");
+    }
     Ok(())
 }
 
@@ -280,163 +306,6 @@ fn blocks(ty: Option<&str>) -> Result<(), Failure> {
     for p in t.params {
         let default = p.default.map_or("required".to_string(), |d| format!("default {d}"));
         println!("  {:<14} {:<18} {}", p.name, default, p.doc);
-    }
-    Ok(())
-}
-
-/// What `run` writes besides the summary line.
-struct RunOptions<'a> {
-    out: Option<&'a Path>,
-    plot: Option<&'a Path>,
-    stop_time: Option<f64>,
-    report: Option<&'a Path>,
-    seed: Option<u64>,
-}
-
-fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> Failure + '_ {
-    move |e| Failure::Run(format!("cannot write {}: {e}", path.display()))
-}
-
-fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
-    // Interrupted (SIGINT, SIGTERM): no half-written temporaries are left.
-    let _ = ctrlc::set_handler(|| {
-        ctlgraph::record::remove_temporaries();
-        std::process::exit(130);
-    });
-    if let Some(t) = opts.stop_time.filter(|t| !(*t > 0.0 && t.is_finite())) {
-        return Err(Diagnostic::plain(format!("--stop-time {t}: must be a positive number")).into());
-    }
-    if let Some(plot) = opts.plot.filter(|p| !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"))) {
-        return Err(Diagnostic::plain(format!("--plot {}: ctlgraph draws SVG", plot.display()))
-            .with_hint("name the file .svg (rsvg-convert or a browser turns it into PNG)")
-            .into());
-    }
-    // An output must not overwrite the graph or another output.
-    let same = |a: &Path, b: &Path| a == b || a.canonicalize().ok().is_some_and(|x| b.canonicalize().ok() == Some(x));
-    let outputs: Vec<(&str, &Path)> = [("--out", opts.out), ("--plot", opts.plot), ("--report", opts.report)]
-        .into_iter()
-        .filter_map(|(f, p)| p.map(|p| (f, p)))
-        .collect();
-    for (i, (flag, p)) in outputs.iter().enumerate() {
-        if same(p, graph) {
-            return Err(Diagnostic::plain(format!("{flag} {}: that is the graph file", p.display())).into());
-        }
-        if let Some((other, _)) = outputs[..i].iter().find(|(_, q)| same(p, q) && p != &Path::new("-")) {
-            return Err(Diagnostic::plain(format!("{flag} {}: also given to {other}", p.display())).into());
-        }
-    }
-    // `--out -`: the CSV goes to stdout, the summary to stderr.
-    let to_stdout = opts.out.is_some_and(|p| p == Path::new("-"));
-    let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
-    let model = ctlgraph::compile_file_seeded(graph, &sets, opts.seed)?;
-    let seed = model.sim.seed;
-    let mut sim = Simulator::new(model, opts.stop_time);
-    // Checks whose window lies after the stop time (a shortened run) cannot
-    // measure anything: they are skipped, and said so.
-    let (checks, skipped): (Vec<_>, Vec<_>) =
-        sim.model().checks.iter().cloned().partition(|c| c.window_problem(sim.stop_time()).is_none());
-    let headers = sim.model().headers();
-    let mut csv = match opts.out.filter(|_| !to_stdout) {
-        Some(path) => Some(CsvFile::create(path, &headers).map_err(io_error(path))?),
-        None => None,
-    };
-    let keep_trace = opts.plot.is_some() || !checks.is_empty() || to_stdout;
-    let mut trace = keep_trace.then(|| Trace::new(headers.clone()));
-    let mut recorder = Recorder::new(sim.model());
-    let mut progress = Progress::new(sim.stop_time());
-    let mut steps = 0u64;
-    let start = Instant::now();
-    let mut emit = |row: &[f64]| {
-        if let Some(c) = csv.as_mut() {
-            c.write_row(row);
-        }
-        if let Some(tr) = trace.as_mut() {
-            tr.push(row);
-        }
-    };
-    let result = sim.run(&mut |t, signals| {
-        recorder.sample(t, signals, &mut emit);
-        steps += 1;
-        if steps.is_multiple_of(1024) {
-            progress.tick(t);
-        }
-    });
-    recorder.flush(&mut emit);
-    progress.finish();
-    let wall = start.elapsed().as_secs_f64();
-    let results: Vec<_> = match (&result, &trace) {
-        (Ok(_), Some(tr)) => checks.iter().map(|c| tr.check(c)).collect(),
-        _ => Vec::new(),
-    };
-    if let Some(path) = opts.report {
-        let bytes = std::fs::read(graph).unwrap_or_default();
-        let info = RunInfo {
-            graph: &graph.display().to_string(),
-            graph_bytes: &bytes,
-            method: sim.method(),
-            stats: sim.stats(),
-            seed,
-            stop: sim.stop_time(),
-            simulated: sim.time(),
-            wall_seconds: wall,
-            error: result.as_ref().err().map(ToString::to_string),
-            warnings: sim.warnings(),
-            checks: &results,
-            columns: &sim.model().columns,
-            blocks: &sim.model().meta,
-            parameters: &sim.model().parameters,
-            overrides: &sets,
-        };
-        let text = serde_json::to_string_pretty(&to_json(&info)).unwrap_or_default();
-        write_atomic(path, text.as_bytes()).map_err(io_error(path))?;
-    }
-    result.map_err(|e| Failure::Run(e.to_string()))?;
-    if let (Some(c), Some(path)) = (csv, opts.out) {
-        c.commit().map_err(io_error(path))?;
-        if let Some(units) = ctlgraph::record::units_csv(sim.model()) {
-            let sidecar = ctlgraph::record::units_path(path);
-            write_atomic(&sidecar, units.as_bytes()).map_err(io_error(&sidecar))?;
-        }
-    }
-    if let (Some(tr), Some(path)) = (&trace, opts.plot) {
-        let title = sim.model().name.clone().unwrap_or_else(|| graph.display().to_string());
-        let model = sim.model();
-        let svg = ctlgraph::plot::render_svg(tr, &title, &model.scopes, &model.columns).map_err(Failure::Run)?;
-        write_atomic(path, svg.as_bytes()).map_err(io_error(path))?;
-    }
-    let simulated = sim.time();
-    let wall_text = if wall < 1.0 { format!("{:.2} ms", wall * 1e3) } else { format!("{wall:.3} s") };
-    let stats = sim.stats();
-    let plural = |n: u64, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
-    let events = if stats.events > 0 { format!(", {} located", plural(stats.events, "event")) } else { String::new() };
-    // Below 10 µs of wall time the ratio would be noise.
-    let ratio =
-        if wall >= 1e-5 && simulated > 0.0 { format!(" ({:.1}x real time)", simulated / wall) } else { String::new() };
-    let mut report = format!(
-        "{}: {}{events}, {simulated} s simulated in {wall_text} wall{ratio}\n",
-        graph.display(),
-        plural(stats.major_steps, "step"),
-    );
-    for w in sim.warnings() {
-        report.push_str(&format!("  warning: {w}\n"));
-    }
-    for r in &results {
-        report.push_str(&format!("  {r}\n"));
-    }
-    for c in &skipped {
-        let why = c.window_problem(sim.stop_time()).unwrap_or_default();
-        report.push_str(&format!("  skip  {}  ({why})\n", c.name));
-    }
-    if let (true, Some(tr)) = (to_stdout, &trace) {
-        // A reader that stops early (`| head`) is not an error.
-        let _ = std::io::Write::write_all(&mut std::io::stdout(), ctlgraph::record::trace_csv(tr).as_bytes());
-        eprint!("{report}");
-    } else {
-        print!("{report}");
-    }
-    let failed = results.iter().filter(|r| !r.passed).count();
-    if failed > 0 {
-        return Err(Failure::Run(format!("{failed} of {} checks failed", results.len())));
     }
     Ok(())
 }
@@ -515,12 +384,4 @@ fn prop(graph: &Path, vary: &[String], vary_seed: bool, cases: u32, seed: u64) -
             Err(Failure::Run(String::new()))
         }
     }
-}
-
-/// Raised by Ctrl-C (SIGINT) so a sweep stops taking cases and writes the
-/// rows it has.
-fn ctrlc_flag() -> &'static std::sync::atomic::AtomicBool {
-    static FLAG: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-    let _ = ctrlc::set_handler(|| FLAG.store(true, std::sync::atomic::Ordering::Relaxed));
-    &FLAG
 }

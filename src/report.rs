@@ -16,6 +16,9 @@ pub struct RunInfo<'a> {
     pub stop: f64,
     pub simulated: f64,
     pub wall_seconds: f64,
+    /// `ok`, `checks failed`, `failed` (a numeric fault), `interrupted`
+    /// (SIGINT, SIGTERM) or `stopped` (a step or wall-time budget).
+    pub status: &'a str,
     pub error: Option<String>,
     pub warnings: &'a [String],
     pub checks: &'a [CheckResult],
@@ -75,7 +78,7 @@ pub fn to_json(info: &RunInfo) -> Value {
         "checks": info.checks.iter().map(|c| json!({
             "name": c.name, "measured": c.measured, "op": c.op.symbol(), "bound": c.bound, "passed": c.passed,
         })).collect::<Vec<_>>(),
-        "status": if info.error.is_some() { "failed" } else if info.checks.iter().any(|c| !c.passed) { "checks failed" } else { "ok" },
+        "status": info.status,
         "error": info.error,
         "warnings": info.warnings,
         "columns": info.columns.iter().map(|c| json!({ "name": c.name, "width": c.width, "unit": c.unit })).collect::<Vec<_>>(),

@@ -16,6 +16,8 @@ pub enum Failure {
     Invalid(Diagnostic),
     /// The run failed (exit code 1).
     Run(String),
+    /// SIGINT or SIGTERM ended the command early (exit code 130).
+    Interrupted(String),
 }
 
 impl Failure {
@@ -23,6 +25,7 @@ impl Failure {
         match self {
             Failure::Invalid(_) => 2,
             Failure::Run(_) => 1,
+            Failure::Interrupted(_) => 130,
         }
     }
 }
@@ -31,7 +34,7 @@ impl std::fmt::Display for Failure {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Failure::Invalid(d) => write!(f, "{d}"),
-            Failure::Run(m) => f.write_str(m),
+            Failure::Run(m) | Failure::Interrupted(m) => f.write_str(m),
         }
     }
 }

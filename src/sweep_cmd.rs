@@ -2,7 +2,7 @@
 //! [`ctlgraph::sweep`] (argument checks, progress, Ctrl-C, output files).
 
 use crate::progress::CaseProgress;
-use crate::{ctrlc_flag, io_error};
+use crate::run_cmd::io_error;
 use ctlgraph::record::write_atomic;
 use ctlgraph::suite::Failure;
 use ctlgraph_core::Diagnostic;
@@ -87,7 +87,7 @@ pub(crate) fn sweep(graph: &Path, a: SweepArgs) -> Result<(), Failure> {
     let checks: Vec<String> = ctlgraph::compile_file(graph, &[])?.checks.iter().map(|c| c.name.clone()).collect();
     let stop = std::sync::atomic::AtomicBool::new(false);
     let bar = CaseProgress::new(mine.len());
-    let interrupted = ctrlc_flag();
+    let interrupted = crate::interrupt::flag();
     let done = || {
         bar.tick();
         if interrupted.load(std::sync::atomic::Ordering::Relaxed) {
@@ -120,7 +120,7 @@ pub(crate) fn sweep(graph: &Path, a: SweepArgs) -> Result<(), Failure> {
         println!("{line}");
     }
     if rows.len() < mine.len() {
-        return Err(Failure::Run(format!(
+        return Err(Failure::Interrupted(format!(
             "interrupted: {} of {} cases written to {}",
             rows.len(),
             mine.len(),

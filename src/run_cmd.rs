@@ -1,0 +1,279 @@
+//! `ctlgraph run`: simulate one graph, write its CSV, plot and report, and
+//! print the summary. A run that ends early — a numeric fault, Ctrl-C, a
+//! step or wall-time budget — still writes its outputs, whole, for what was
+//! simulated, so the user can look at what led there.
+
+use crate::interrupt;
+use crate::progress::Progress;
+use ctlgraph::record::{CsvFile, Number, Recorder, Trace, write_atomic};
+use ctlgraph::report::{RunInfo, to_json};
+use ctlgraph::suite::Failure;
+use ctlgraph_core::flatten::parse_set;
+use ctlgraph_core::{Diagnostic, Simulator};
+use std::path::Path;
+use std::time::Instant;
+
+/// What `run` writes besides the summary line, and its budgets.
+pub(crate) struct RunOptions<'a> {
+    pub out: Option<&'a Path>,
+    pub plot: Option<&'a Path>,
+    pub stop_time: Option<f64>,
+    pub report: Option<&'a Path>,
+    pub seed: Option<u64>,
+    pub max_steps: Option<u64>,
+    pub max_wall: Option<f64>,
+}
+
+/// Block-steps (major steps × blocks) above which a run is announced as
+/// long: about a minute at the 50 ns per block-step the scaling bench
+/// measures.
+const LONG_RUN_BLOCK_STEPS: f64 = 1e9;
+
+/// Why a run ended before its stop time without a numeric fault.
+#[derive(Clone, Copy)]
+enum Cut {
+    Interrupted,
+    MaxSteps(u64),
+    MaxWall(f64),
+}
+
+pub(crate) fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> Failure + '_ {
+    move |e| Failure::Run(format!("cannot write {}: {e}", path.display()))
+}
+
+/// Refuses option values and output paths that cannot work, before
+/// anything is compiled or written.
+fn validate(graph: &Path, opts: &RunOptions) -> Result<(), Failure> {
+    if let Some(t) = opts.stop_time.filter(|t| !(*t > 0.0 && t.is_finite())) {
+        return Err(Diagnostic::plain(format!("--stop-time {t}: must be a positive number")).into());
+    }
+    if let Some(w) = opts.max_wall.filter(|w| !(*w > 0.0 && w.is_finite())) {
+        return Err(Diagnostic::plain(format!("--max-wall {w}: must be a positive number of seconds")).into());
+    }
+    if opts.max_steps == Some(0) {
+        return Err(Diagnostic::plain("--max-steps 0: a run takes at least one step").into());
+    }
+    if let Some(plot) = opts.plot.filter(|p| !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("svg"))) {
+        return Err(Diagnostic::plain(format!("--plot {}: ctlgraph draws SVG", plot.display()))
+            .with_hint("name the file .svg (rsvg-convert or a browser turns it into PNG)")
+            .into());
+    }
+    // An output must not overwrite the graph or another output.
+    let same = |a: &Path, b: &Path| a == b || a.canonicalize().ok().is_some_and(|x| b.canonicalize().ok() == Some(x));
+    let outputs: Vec<(&str, &Path)> = [("--out", opts.out), ("--plot", opts.plot), ("--report", opts.report)]
+        .into_iter()
+        .filter_map(|(f, p)| p.map(|p| (f, p)))
+        .collect();
+    for (i, (flag, p)) in outputs.iter().enumerate() {
+        if same(p, graph) {
+            return Err(Diagnostic::plain(format!("{flag} {}: that is the graph file", p.display())).into());
+        }
+        if let Some((other, _)) = outputs[..i].iter().find(|(_, q)| same(p, q) && p != &Path::new("-")) {
+            return Err(Diagnostic::plain(format!("{flag} {}: also given to {other}", p.display())).into());
+        }
+    }
+    Ok(())
+}
+
+/// The warning for a run expected to take long, if it is.
+pub(crate) fn long_run_warning(sim: &Simulator) -> Option<String> {
+    let steps = sim.expected_major_steps();
+    let blocks = sim.model().meta.len();
+    (steps * blocks.max(1) as f64 > LONG_RUN_BLOCK_STEPS).then(|| {
+        format!(
+            "this run takes about {} major steps with {blocks} block{} (minutes or more): \
+             Ctrl-C stops it and keeps what was simulated; --max-steps and --max-wall bound it",
+            Number(steps),
+            if blocks == 1 { "" } else { "s" }
+        )
+    })
+}
+
+pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(), Failure> {
+    let interrupted = interrupt::flag();
+    validate(graph, &opts)?;
+    // `--out -`: the CSV goes to stdout, the summary to stderr.
+    let to_stdout = opts.out.is_some_and(|p| p == Path::new("-"));
+    let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
+    let model = ctlgraph::compile_file_seeded(graph, &sets, opts.seed)?;
+    let seed = model.sim.seed;
+    let mut sim = Simulator::new(model, opts.stop_time);
+    if let Some(w) = long_run_warning(&sim) {
+        eprintln!("warning: {w}");
+    }
+    // Checks whose window lies after the stop time (a shortened run) cannot
+    // measure anything: they are skipped, and said so.
+    let (checks, skipped): (Vec<_>, Vec<_>) =
+        sim.model().checks.iter().cloned().partition(|c| c.window_problem(sim.stop_time()).is_none());
+    let headers = sim.model().headers();
+    let mut csv = match opts.out.filter(|_| !to_stdout) {
+        Some(path) => Some(CsvFile::create(path, &headers).map_err(io_error(path))?),
+        None => None,
+    };
+    let keep_trace = opts.plot.is_some() || !checks.is_empty() || to_stdout;
+    let mut trace = keep_trace.then(|| Trace::new(headers.clone()));
+    let mut recorder = Recorder::new(sim.model());
+    let mut progress = Progress::new(sim.stop_time());
+    let (max_steps, max_wall) = (opts.max_steps.unwrap_or(u64::MAX), opts.max_wall.unwrap_or(f64::INFINITY));
+    let mut steps = 0u64;
+    let mut cut = None;
+    let mut last_step = 0.0;
+    let start = Instant::now();
+    let mut emit = |row: &[f64]| {
+        if let Some(c) = csv.as_mut() {
+            c.write_row(row);
+        }
+        if let Some(tr) = trace.as_mut() {
+            tr.push(row);
+        }
+    };
+    let result = sim.run_while(&mut |t, signals| {
+        recorder.sample(t, signals, &mut emit);
+        last_step = t;
+        steps += 1;
+        if steps.is_multiple_of(1024) {
+            progress.tick(t);
+            if start.elapsed().as_secs_f64() > max_wall {
+                cut = Some(Cut::MaxWall(max_wall));
+            }
+        }
+        if steps > max_steps {
+            cut = Some(Cut::MaxSteps(max_steps));
+        }
+        if interrupted.load(std::sync::atomic::Ordering::Relaxed) {
+            cut = Some(Cut::Interrupted);
+        }
+        cut.is_none()
+    });
+    recorder.flush(&mut emit);
+    progress.finish();
+    let wall = start.elapsed().as_secs_f64();
+    // A run that reached its stop time has no cut, even if one was asked
+    // for at its last step.
+    let cut = if matches!(result, Ok(false)) { cut } else { None };
+    let finished = matches!(result, Ok(true));
+    let results: Vec<_> = match (finished, &trace) {
+        (true, Some(tr)) => checks.iter().map(|c| tr.check(c)).collect(),
+        _ => Vec::new(),
+    };
+    let error = match (&result, cut) {
+        (Err(e), _) => Some(e.to_string()),
+        (_, Some(cut)) => Some(cut_message(cut, &sim)),
+        _ => None,
+    };
+    let status = match (&result, cut) {
+        (Err(_), _) => "failed",
+        (_, Some(Cut::Interrupted)) => "interrupted",
+        (_, Some(_)) => "stopped",
+        _ if results.iter().any(|c| !c.passed) => "checks failed",
+        _ => "ok",
+    };
+    // The outputs: whole files, for what was simulated (up to the last
+    // complete major step when the run ended early).
+    if let Some(path) = opts.report {
+        let bytes = std::fs::read(graph).unwrap_or_default();
+        let info = RunInfo {
+            graph: &graph.display().to_string(),
+            graph_bytes: &bytes,
+            method: sim.method(),
+            stats: sim.stats(),
+            seed,
+            stop: sim.stop_time(),
+            simulated: sim.time(),
+            wall_seconds: wall,
+            status,
+            error: error.clone(),
+            warnings: sim.warnings(),
+            checks: &results,
+            columns: &sim.model().columns,
+            blocks: &sim.model().meta,
+            parameters: &sim.model().parameters,
+            overrides: &sets,
+        };
+        let text = serde_json::to_string_pretty(&to_json(&info)).unwrap_or_default();
+        write_atomic(path, text.as_bytes()).map_err(io_error(path))?;
+    }
+    if let (Some(c), Some(path)) = (csv, opts.out) {
+        c.commit().map_err(io_error(path))?;
+        if let Some(units) = ctlgraph::record::units_csv(sim.model()) {
+            let sidecar = ctlgraph::record::units_path(path);
+            write_atomic(&sidecar, units.as_bytes()).map_err(io_error(&sidecar))?;
+        }
+    }
+    if let (Some(tr), Some(path)) = (&trace, opts.plot) {
+        let title = sim.model().name.clone().unwrap_or_else(|| graph.display().to_string());
+        let model = sim.model();
+        let svg = ctlgraph::plot::render_svg(tr, &title, &model.scopes, &model.columns).map_err(Failure::Run)?;
+        write_atomic(path, svg.as_bytes()).map_err(io_error(path))?;
+    }
+    let report = summary(graph, &sim, wall, &results, &skipped, finished);
+    if let (true, Some(tr)) = (to_stdout, &trace) {
+        let _ = std::io::Write::write_all(&mut std::io::stdout(), ctlgraph::record::trace_csv(tr).as_bytes());
+        eprint!("{report}");
+    } else {
+        print!("{report}");
+    }
+    let written = [opts.out.filter(|_| !to_stdout), opts.plot, opts.report].into_iter().flatten().count();
+    let kept = if written > 0 { format!("; the outputs hold the run to t = {last_step}") } else { String::new() };
+    match (result, cut) {
+        (Err(e), _) => Err(Failure::Run(format!("{e}{kept}"))),
+        (_, Some(Cut::Interrupted)) => {
+            Err(Failure::Interrupted(format!("{}{kept}", cut_message(Cut::Interrupted, &sim))))
+        }
+        (_, Some(c)) => Err(Failure::Run(format!("{}{kept}", cut_message(c, &sim)))),
+        _ => {
+            let failed = results.iter().filter(|r| !r.passed).count();
+            if failed > 0 {
+                return Err(Failure::Run(format!("{failed} of {} checks failed", results.len())));
+            }
+            Ok(())
+        }
+    }
+}
+
+fn cut_message(cut: Cut, sim: &Simulator) -> String {
+    let at = format!("t = {} of {} s", sim.time(), Number(sim.stop_time()));
+    match cut {
+        Cut::Interrupted => format!("interrupted at {at}"),
+        Cut::MaxSteps(n) => format!("stopped at {at}: --max-steps {n} reached"),
+        Cut::MaxWall(w) => format!("stopped at {at}: --max-wall {w} s reached"),
+    }
+}
+
+/// The lines printed after a run: steps, time and speed, warnings, checks.
+fn summary(
+    graph: &Path,
+    sim: &Simulator,
+    wall: f64,
+    results: &[ctlgraph_core::checks::CheckResult],
+    skipped: &[ctlgraph_core::checks::Check],
+    finished: bool,
+) -> String {
+    let simulated = sim.time();
+    let wall_text = if wall < 1.0 { format!("{:.2} ms", wall * 1e3) } else { format!("{wall:.3} s") };
+    let stats = sim.stats();
+    let plural = |n: u64, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
+    let events = if stats.events > 0 { format!(", {} located", plural(stats.events, "event")) } else { String::new() };
+    // Below 10 µs of wall time the ratio would be noise.
+    let ratio =
+        if wall >= 1e-5 && simulated > 0.0 { format!(" ({:.1}x real time)", simulated / wall) } else { String::new() };
+    let mut report = format!(
+        "{}: {}{events}, {simulated} s simulated in {wall_text} wall{ratio}\n",
+        graph.display(),
+        plural(stats.major_steps, "step"),
+    );
+    for w in sim.warnings() {
+        report.push_str(&format!("  warning: {w}\n"));
+    }
+    for r in results {
+        report.push_str(&format!("  {r}\n"));
+    }
+    if !finished && !sim.model().checks.is_empty() {
+        report.push_str("  checks not evaluated: the run ended before its stop time\n");
+    }
+    for c in skipped.iter().filter(|_| finished) {
+        let why = c.window_problem(sim.stop_time()).unwrap_or_default();
+        report.push_str(&format!("  skip  {}  ({why})\n", c.name));
+    }
+    report
+}
