@@ -98,12 +98,12 @@ pub fn closest<'a>(got: &str, candidates: impl IntoIterator<Item = &'a str>) -> 
         .into_iter()
         .map(|c| {
             let d = strsim::damerau_levenshtein(got, c);
-            let contained = got.len() >= 3 && (c.contains(got) || got.contains(c));
-            (if contained { d.min(limit) } else { d }, c)
+            let contained = got.len() >= 3 && c.len() >= 3 && (c.contains(got) || got.contains(c));
+            (if contained { d.min(limit) } else { d }, d, c)
         })
-        .filter(|&(d, _)| d <= limit)
-        .min_by_key(|&(d, c)| (d, !c.starts_with(got), c.len()))
-        .map(|(_, c)| c)
+        .filter(|&(d, _, _)| d <= limit)
+        .min_by_key(|&(d, real, c)| (d, real, !c.starts_with(got), c.len()))
+        .map(|(_, _, c)| c)
 }
 
 #[cfg(test)]
@@ -116,6 +116,8 @@ mod tests {
         assert_eq!(closest("tranfer_function", types), Some("transfer_function"));
         assert_eq!(closest("gian", types), Some("gain"));
         assert_eq!(closest("integrator", types), None);
+        // A one-letter name inside the word is no suggestion; the near miss is.
+        assert_eq!(closest("ctrll", ["r", "e", "ctrl", "plant"]), Some("ctrl"));
     }
 
     #[test]
