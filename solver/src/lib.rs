@@ -8,6 +8,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod dense_lu;
+pub mod freq;
 pub mod lti;
 pub mod ode;
 pub mod poly;
