@@ -8,6 +8,7 @@
 //! println!("y(end) = {}", trace.column("y").unwrap().last().unwrap());
 //! ```
 
+pub mod analysis;
 pub mod dot;
 pub mod plot;
 pub mod prop;
@@ -23,7 +24,7 @@ pub use ctlgraph_core as core;
 pub use ctlgraph_solver as solver;
 
 pub use ctlgraph_core::trace::simulate;
-use ctlgraph_core::{Diagnostic, Model, Registry};
+use ctlgraph_core::{Diagnostic, FlatGraph, Model, Registry};
 use std::path::Path;
 
 /// The full block library.
@@ -40,7 +41,19 @@ pub fn compile_file(path: &Path, sets: &[(String, String)]) -> Result<Model, Dia
 /// Like [`compile_file`] with a registry of your own (the library's types
 /// plus custom blocks; see `examples/custom_block.rs`).
 pub fn compile_file_with(path: &Path, sets: &[(String, String)], registry: &Registry) -> Result<Model, Diagnostic> {
-    ctlgraph_core::compile(&ctlgraph_core::load(path, sets)?, registry)
+    compile_flat(&ctlgraph_core::load(path, sets)?, registry)
+}
+
+/// Compiles a loaded graph; when its checks read figures of the analysed
+/// loop (`phase_margin > 45`), a second copy is compiled and linearised
+/// around its initial operating point to provide them.
+pub fn compile_flat(flat: &FlatGraph, registry: &Registry) -> Result<Model, Diagnostic> {
+    let mut model = ctlgraph_core::compile(flat, registry)?;
+    if model.checks.iter().any(|c| c.needs_loop_figures()) {
+        let twin = ctlgraph_core::compile(flat, registry)?;
+        model.loop_figures = Some(analysis::loop_figures(twin)?);
+    }
+    Ok(model)
 }
 
 /// Like [`compile_file`] with `simulation.seed` replaced (random blocks
@@ -50,12 +63,12 @@ pub fn compile_file_seeded(path: &Path, sets: &[(String, String)], seed: Option<
     if let Some(s) = seed {
         flat.sim.seed = s;
     }
-    ctlgraph_core::compile(&flat, &registry())
+    compile_flat(&flat, &registry())
 }
 
 /// Like [`compile_file`] for graph text in memory; `name` stands for the
 /// file in messages (and relative paths resolve from its folder).
 pub fn compile_str(text: &str, name: &str, sets: &[(String, String)]) -> Result<Model, Diagnostic> {
     let flat = ctlgraph_core::load_str(text, name.into(), sets)?;
-    ctlgraph_core::compile(&flat, &registry())
+    compile_flat(&flat, &registry())
 }

@@ -1,6 +1,7 @@
 //! The `ctlgraph` command line. Exit codes: 0 success; 1 the run failed;
 //! 2 the input is invalid (file, YAML, schema, graph, arguments).
 
+mod analysis_cmd;
 mod interrupt;
 mod progress;
 mod run_cmd;
@@ -133,6 +134,32 @@ enum Command {
         #[arg(long = "set", value_name = "NAME=VALUE")]
         sets: Vec<String>,
     },
+    /// The linear model around an operating point: A, B, C, D with states named by block.
+    #[command(after_help = "Examples:\n  ctlgraph linearize graphs/tutorial/pid_loop.yaml --open ctrl.u\n  \
+                      ctlgraph linearize graphs/tutorial/pid_loop.yaml --input ctrl.u --output plant --out lin.json")]
+    Linearize {
+        #[command(flatten)]
+        select: analysis_cmd::SelectArgs,
+        /// Write the model, its state names and poles as JSON.
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+    },
+    /// Frequency response and loop figures: gain, phase and delay margins, peak sensitivity, bandwidth.
+    #[command(
+        after_help = "Example:\n  ctlgraph bode graphs/tutorial/pid_loop.yaml --open ctrl.u --svg bode.svg --csv bode.csv"
+    )]
+    Bode {
+        #[command(flatten)]
+        select: analysis_cmd::SelectArgs,
+        #[command(flatten)]
+        grid: analysis_cmd::GridArgs,
+    },
+    /// Poles of the linear model, with natural frequencies and damping.
+    #[command(after_help = "Example:\n  ctlgraph poles graphs/tutorial/pid_loop.yaml")]
+    Poles {
+        #[command(flatten)]
+        select: analysis_cmd::SelectArgs,
+    },
     /// List the block library, or document one block type.
     #[command(
         after_help = "Example:\n  ctlgraph blocks transport_delay\n  ctlgraph blocks --markdown > docs/blocks.md"
@@ -171,6 +198,9 @@ fn main() -> ExitCode {
             Err(Diagnostic::plain("sweep needs a graph file (or `sweep merge TABLES --out FILE`)").into())
         }
         Command::Check { graph, sets } => check(&graph, &sets),
+        Command::Linearize { select, out } => analysis_cmd::linearize(select, out.as_deref()),
+        Command::Bode { select, grid } => analysis_cmd::bode(select, grid),
+        Command::Poles { select } => analysis_cmd::poles(select),
         Command::Dot { graph, sets } => compile(&graph, &sets).map(|m| print!("{}", ctlgraph::dot::to_dot(&m))),
         Command::Blocks { markdown: true, .. } => {
             print!("{}", ctlgraph::reference::markdown(&ctlgraph::registry()));

@@ -254,7 +254,7 @@ fn compile(text: &str, file: &Path, names: &[String], case: &Case) -> Result<ctl
     if let Some(seed) = case.seed {
         flat.sim.seed = seed;
     }
-    Ok(ctlgraph_core::compile(&flat, &crate::registry())?)
+    Ok(crate::compile_flat(&flat, &crate::registry())?)
 }
 
 /// The results table: `case`, the parameters, `seed`, each check's

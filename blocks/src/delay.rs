@@ -254,6 +254,10 @@ impl TransportDelay {
 }
 
 impl Block for TransportDelay {
+    fn not_linearizable(&self) -> Option<&'static str> {
+        Some("a transport delay e^(-sτ) has no finite-dimensional linear model (read the loop's delay margin instead)")
+    }
+
     fn set_width(&mut self, width: usize) -> Result<(), String> {
         self.history = History::new(width, self.history.times.len(), self.history.limit, self.history.cubic);
         Ok(())

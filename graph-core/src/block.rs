@@ -392,6 +392,13 @@ pub trait Block: Send {
     /// which lie within a few ulps of zero on either side.
     fn crossing_located(&mut self, _k: usize) {}
 
+    /// Why the block has no linear model at an instant, if it has none:
+    /// memory in continuous time that the solver does not integrate (a
+    /// transport delay's history). Linearisation refuses a path through it.
+    fn not_linearizable(&self) -> Option<&'static str> {
+        None
+    }
+
     /// The block's matrices when it is a continuous LTI system whose states
     /// are exactly the system's (transfer functions, zpk, state space): the
     /// simulator may then advance it by its exact zero-order-hold transition

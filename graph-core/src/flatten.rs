@@ -86,6 +86,8 @@ pub struct FlatGraph {
     pub checks: Vec<crate::checks::CheckSpec>,
     /// The top-level file's plot panels, evaluated.
     pub scopes: Vec<crate::scope::Scope>,
+    /// The top-level file's `analysis:` section.
+    pub analysis: Option<crate::spec::Selection>,
     /// Subsystem path → its (inports, outports), for resolving records.
     pub subsystems: HashMap<String, (Vec<String>, Vec<String>)>,
 }
@@ -135,6 +137,7 @@ pub fn load_str(text: &str, file: Arc<str>, overrides: &[(String, String)]) -> R
         record_every: graph.record_every.as_ref().map_or(1, |e| e.0),
         checks: graph.checks.clone(),
         scopes: Vec::new(),
+        analysis: graph.analysis.clone(),
         subsystems: HashMap::new(),
     };
     let number = |v: &Yaml, key: &str| -> Result<f64, Diagnostic> {

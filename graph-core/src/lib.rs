@@ -12,6 +12,7 @@ pub mod compile;
 pub mod diag;
 pub mod expr;
 pub mod flatten;
+pub mod linearize;
 pub mod params;
 pub mod registry;
 pub mod scope;

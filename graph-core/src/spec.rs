@@ -8,8 +8,8 @@ use crate::scope::{self, ScopeSpec};
 use crate::yaml::{self, Key, Kind, Yaml};
 use std::sync::Arc;
 
-const TOP_KEYS: [&str; 9] =
-    ["name", "description", "parameters", "simulation", "blocks", "wires", "record", "checks", "scopes"];
+const TOP_KEYS: [&str; 10] =
+    ["name", "description", "parameters", "simulation", "blocks", "wires", "record", "checks", "scopes", "analysis"];
 
 /// One graph file.
 #[derive(Clone, Debug)]
@@ -30,6 +30,54 @@ pub struct GraphFile {
     pub checks: Vec<CheckSpec>,
     /// Plot panels.
     pub scopes: Vec<ScopeSpec>,
+    /// What linear analysis looks at (`analysis:`).
+    pub analysis: Option<Selection>,
+}
+
+/// What a linear analysis looks at: the signal where a perturbation is
+/// added, the one measured, where the loop is cut, and the time of the
+/// operating point. Signals are `block`, `block.port`, or `name[k]` for an
+/// element of a vector. An opening alone selects the loop transfer there.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Selection {
+    pub input: Option<String>,
+    pub output: Option<String>,
+    /// Downstream of this signal the loop is cut: blocks see only the
+    /// injected input there; measuring it reads the upstream value.
+    pub open: Option<String>,
+    /// The operating point is the state the run reaches at this time.
+    pub at: f64,
+    /// Where the selection was written (the `analysis:` section).
+    pub pos: Option<Pos>,
+}
+
+const ANALYSIS_KEYS: [&str; 4] = ["input", "output", "open", "at"];
+
+fn parse_analysis(v: &Yaml) -> Result<Selection, Diagnostic> {
+    let map = v.expect_map("`analysis`")?;
+    let mut sel = Selection { pos: Some(v.pos.clone()), ..Selection::default() };
+    for (k, value) in map {
+        let text = || value.expect_str(&format!("analysis `{}`", k.name)).map(|s| Some(s.to_string()));
+        match k.name.as_str() {
+            "input" => sel.input = text()?,
+            "output" => sel.output = text()?,
+            "open" => sel.open = text()?,
+            "at" => match value.kind {
+                Kind::Num(t) if t >= 0.0 && t.is_finite() => sel.at = t,
+                _ => return Err(Diagnostic::at(&value.pos, "analysis `at`: a time in seconds from 0")),
+            },
+            _ => {
+                return Err(Diagnostic::at(&k.pos, format!("unknown key `{}` in `analysis`", k.name))
+                    .suggest(&k.name, ANALYSIS_KEYS)
+                    .or_hint(format!("keys: {}", ANALYSIS_KEYS.join(", "))));
+            }
+        }
+    }
+    match (&sel.input, &sel.output, &sel.open) {
+        (Some(_), Some(_), _) | (None, None, Some(_)) => Ok(sel),
+        _ => Err(Diagnostic::at(&v.pos, "`analysis` names an input and an output signal, or a loop opening alone")
+            .with_hint("e.g. `analysis: { open: ctrl.u }` for the loop transfer at the controller output")),
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -120,9 +168,11 @@ impl GraphFile {
             Some(v) => scope::parse(v)?,
             None => Vec::new(),
         };
+        let analysis = yaml::lookup(top, "analysis").map(parse_analysis).transpose()?;
         Ok(GraphFile {
             checks,
             scopes,
+            analysis,
             name: text_of("name")?,
             description: text_of("description")?,
             parameters,

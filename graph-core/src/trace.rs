@@ -12,6 +12,7 @@ pub fn simulate(model: Model, stop: Option<f64>) -> Result<Trace, SimError> {
     let mut sim = Simulator::new(model, stop);
     let mut recorder = Recorder::new(sim.model());
     let mut trace = Trace::new(sim.model().headers());
+    trace.loop_figures = sim.model().loop_figures.clone();
     sim.run(&mut |t, signals| recorder.sample(t, signals, &mut |row| trace.push(row)))?;
     recorder.flush(&mut |row| trace.push(row));
     Ok(trace)
@@ -70,12 +71,14 @@ impl Recorder {
 pub struct Trace {
     pub headers: Vec<String>,
     pub columns: Vec<Vec<f64>>,
+    /// The analysed loop's figures, for checks that read them.
+    pub loop_figures: Option<Vec<f64>>,
 }
 
 impl Trace {
     pub fn new(headers: Vec<String>) -> Self {
         let columns = vec![Vec::new(); headers.len()];
-        Trace { headers, columns }
+        Trace { headers, columns, loop_figures: None }
     }
 
     pub fn push(&mut self, row: &[f64]) {
@@ -91,7 +94,7 @@ impl Trace {
 
     /// A graph check evaluated on these signals.
     pub fn check(&self, check: &Check) -> CheckResult {
-        check.evaluate(&self.columns)
+        check.evaluate(&self.columns, self.loop_figures.as_deref())
     }
 
     /// A column by header name.

@@ -38,6 +38,37 @@ pub const METRICS: [(&str, Metric, &[&str]); 13] = [
     ("itae", Metric::Itae, &[]),
 ];
 
+/// Figures of the loop the graph's `analysis:` section selects, which
+/// checks read by name (`phase_margin > 45`); computed from the graph's
+/// linear model around its initial operating point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LoopFigure {
+    PhaseMargin,
+    GainMarginDb,
+    DelayMargin,
+    PeakSensitivity,
+    CrossoverFrequency,
+    Bandwidth,
+    ClosedLoopBandwidth,
+}
+
+/// Name in checks, figure, what it is.
+pub const LOOP_FIGURES: [(&str, LoopFigure, &str); 7] = [
+    ("phase_margin", LoopFigure::PhaseMargin, "phase margin [deg] (+inf without a gain crossover)"),
+    ("gain_margin_db", LoopFigure::GainMarginDb, "gain margin [dB] (+inf without a phase crossover)"),
+    ("delay_margin", LoopFigure::DelayMargin, "delay margin [s]: phase margin over crossover frequency"),
+    ("peak_sensitivity", LoopFigure::PeakSensitivity, "Ms = max |1/(1 + L)|"),
+    ("crossover_frequency", LoopFigure::CrossoverFrequency, "gain crossover frequency [rad/s]"),
+    ("bandwidth", LoopFigure::Bandwidth, "−3 dB bandwidth of the analysed transfer [rad/s]"),
+    ("closed_loop_bandwidth", LoopFigure::ClosedLoopBandwidth, "−3 dB bandwidth of L/(1 + L) [rad/s]"),
+];
+
+impl LoopFigure {
+    pub fn from_name(name: &str) -> Option<LoopFigure> {
+        LOOP_FIGURES.iter().find(|(n, _, _)| *n == name).map(|&(_, f, _)| f)
+    }
+}
+
 impl Metric {
     pub fn from_name(name: &str) -> Option<(Metric, &'static [&'static str])> {
         METRICS.iter().find(|(n, _, _)| *n == name).map(|&(_, m, a)| (m, a))

@@ -14,7 +14,7 @@ pub mod metrics;
 use crate::diag::{Diagnostic, Pos};
 use crate::expr::{Binding, Constants, Expr, Scope};
 use crate::params::expr_diagnostic;
-use metrics::Metric;
+use metrics::{LOOP_FIGURES, LoopFigure, Metric};
 use std::cell::RefCell;
 
 /// A check as written: optional name, text, position of the text.
@@ -53,12 +53,12 @@ impl Comparison {
     }
 }
 
-/// One metric evaluation a check needs: metric, trace column, arguments.
+/// One value a check needs: a metric of a recorded signal (metric, trace
+/// column, arguments), or a figure of the analysed loop.
 #[derive(Clone, Debug)]
-struct MetricCall {
-    metric: Metric,
-    column: usize,
-    args: Vec<Expr>,
+enum MetricCall {
+    Signal { metric: Metric, column: usize, args: Vec<Expr> },
+    Loop(LoopFigure),
 }
 
 /// A compiled check.
@@ -116,12 +116,18 @@ struct CheckScope<'a> {
 
 impl Scope for CheckScope<'_> {
     fn lookup(&self, name: &str) -> Option<Binding> {
-        Constants(self.params).lookup(name)
+        Constants(self.params).lookup(name).or_else(|| {
+            let figure = LoopFigure::from_name(name)?;
+            let mut calls = self.calls.borrow_mut();
+            calls.push(MetricCall::Loop(figure));
+            Some(Binding::Slot(calls.len() - 1))
+        })
     }
 
     fn names(&self) -> Vec<String> {
         let signals = self.headers.iter().skip(1).filter(|h| !h.contains('['));
-        Constants(self.params).names().into_iter().chain(signals.cloned()).collect()
+        let figures = LOOP_FIGURES.iter().map(|(n, _, _)| n.to_string());
+        Constants(self.params).names().into_iter().chain(signals.cloned()).chain(figures).collect()
     }
 
     fn is_signal(&self, name: &str) -> bool {
@@ -153,7 +159,7 @@ impl Scope for CheckScope<'_> {
         }
         let column = self.headers.iter().position(|h| h == signal).ok_or_else(|| format!("no signal `{signal}`"))?;
         let mut calls = self.calls.borrow_mut();
-        calls.push(MetricCall { metric, column, args });
+        calls.push(MetricCall::Signal { metric, column, args });
         Ok(calls.len() - 1)
     }
 }
@@ -171,12 +177,23 @@ fn split_comparison(text: &str) -> Option<(usize, usize, Comparison)> {
     Some((i, if eq { 2 } else { 1 }, op))
 }
 
-/// Compiles checks against the recorded column `headers` (first is `t`).
-pub fn compile(specs: &[CheckSpec], headers: &[String], params: &[(String, f64)]) -> Result<Vec<Check>, Diagnostic> {
-    specs.iter().map(|spec| compile_one(spec, headers, params)).collect()
+/// Compiles checks against the recorded column `headers` (first is `t`);
+/// loop figures may be used when the graph has an `analysis:` section.
+pub fn compile(
+    specs: &[CheckSpec],
+    headers: &[String],
+    params: &[(String, f64)],
+    has_analysis: bool,
+) -> Result<Vec<Check>, Diagnostic> {
+    specs.iter().map(|spec| compile_one(spec, headers, params, has_analysis)).collect()
 }
 
-fn compile_one(spec: &CheckSpec, headers: &[String], params: &[(String, f64)]) -> Result<Check, Diagnostic> {
+fn compile_one(
+    spec: &CheckSpec,
+    headers: &[String],
+    params: &[(String, f64)],
+    has_analysis: bool,
+) -> Result<Check, Diagnostic> {
     let text = spec.text.as_str();
     let Some((at, len, op)) = split_comparison(text) else {
         return Err(Diagnostic::at(&spec.pos, format!("check `{text}` compares nothing"))
@@ -207,30 +224,59 @@ fn compile_one(spec: &CheckSpec, headers: &[String], params: &[(String, f64)]) -
     let lhs = side(0, at)?;
     let rhs = side(at + len, text.len())?;
     let name = spec.name.clone().unwrap_or_else(|| text.trim().to_string());
-    Ok(Check { name, text: text.to_string(), pos: spec.pos.clone(), lhs, op, rhs, calls: scope.calls.into_inner() })
+    let calls = scope.calls.into_inner();
+    if let (false, Some(figure)) = (has_analysis, calls.iter().find_map(MetricCall::figure)) {
+        let name = LOOP_FIGURES.iter().find(|(_, f, _)| *f == figure).map_or("", |(n, _, _)| *n);
+        return Err(Diagnostic::at(
+            &spec.pos,
+            format!("check: `{name}` is a figure of the analysed loop, and the graph has no `analysis:` section"),
+        )
+        .with_hint("add e.g. `analysis: { open: ctrl.u }` to say which loop (the signal where it is cut)"));
+    }
+    Ok(Check { name, text: text.to_string(), pos: spec.pos.clone(), lhs, op, rhs, calls })
+}
+
+impl MetricCall {
+    fn figure(&self) -> Option<LoopFigure> {
+        match self {
+            MetricCall::Loop(f) => Some(*f),
+            MetricCall::Signal { .. } => None,
+        }
+    }
 }
 
 impl Check {
-    /// Evaluates the check on a run's recorded signals.
+    /// Whether the check reads figures of the analysed loop.
+    pub fn needs_loop_figures(&self) -> bool {
+        self.calls.iter().any(|c| c.figure().is_some())
+    }
+
     /// Why the check cannot measure anything in a run that ends at `stop`:
     /// a metric window (given as constants) that starts after the stop time.
     pub fn window_problem(&self, stop: f64) -> Option<String> {
         self.calls.iter().find_map(|call| {
-            let own = metrics::METRICS.iter().find(|(_, m, _)| *m == call.metric).map_or(0, |(_, _, a)| a.len());
-            let from = call.args.get(own).and_then(Expr::constant)?;
+            let MetricCall::Signal { metric, args, .. } = call else { return None };
+            let own = metrics::METRICS.iter().find(|(_, m, _)| m == metric).map_or(0, |(_, _, a)| a.len());
+            let from = args.get(own).and_then(Expr::constant)?;
             (from > stop).then(|| format!("its window starts at {from} s, after the stop time {stop} s"))
         })
     }
 
     /// The check over recorded columns: `columns[0]` is time, the others
-    /// in the order of the headers the check was compiled against.
-    /// (`Trace::check` is the usual entry.)
-    pub fn evaluate(&self, columns: &[Vec<f64>]) -> CheckResult {
+    /// in the order of the headers the check was compiled against; loop
+    /// figures from `figures`, indexed by [`LoopFigure`] (NaN, and the
+    /// check fails, without them). (`Trace::check` is the usual entry.)
+    pub fn evaluate(&self, columns: &[Vec<f64>], figures: Option<&[f64]>) -> CheckResult {
         let t = &columns[0];
         let mut vars = vec![f64::NAN; self.calls.len()];
         for (k, call) in self.calls.iter().enumerate() {
-            let args: Vec<f64> = call.args.iter().map(|a| a.eval(&vars)).collect();
-            vars[k] = metrics::evaluate(call.metric, t, &columns[call.column], &args);
+            vars[k] = match call {
+                MetricCall::Signal { metric, column, args } => {
+                    let args: Vec<f64> = args.iter().map(|a| a.eval(&vars)).collect();
+                    metrics::evaluate(*metric, t, &columns[*column], &args)
+                }
+                MetricCall::Loop(f) => figures.and_then(|v| v.get(*f as usize)).copied().unwrap_or(f64::NAN),
+            };
         }
         let (measured, bound) = (self.lhs.eval(&vars), self.rhs.eval(&vars));
         CheckResult { name: self.name.clone(), measured, op: self.op, bound, passed: self.op.holds(measured, bound) }
@@ -256,7 +302,7 @@ mod tests {
     fn run(text: &str) -> CheckResult {
         let (headers, columns) = trace();
         let params = vec![("k".to_string(), 2.0)];
-        compile(&[spec(text)], &headers, &params).unwrap()[0].evaluate(&columns)
+        compile(&[spec(text)], &headers, &params, false).unwrap()[0].evaluate(&columns, None)
     }
 
     #[test]
@@ -275,7 +321,7 @@ mod tests {
     #[test]
     fn errors_point_into_the_check() {
         let (headers, _) = trace();
-        let err = |text: &str| compile(&[spec(text)], &headers, &[]).unwrap_err();
+        let err = |text: &str| compile(&[spec(text)], &headers, &[], false).unwrap_err();
         let d = err("peak(ee, 0.6) < 1");
         let message = "check: `peak` takes a recorded signal first: `ee` is not a recorded signal";
         assert_eq!((d.pos.clone().unwrap().col, d.message.as_str()), (10, message));
@@ -285,13 +331,13 @@ mod tests {
         assert_eq!((d.pos.clone().unwrap().col, d.message.as_str()), (5, "check: unknown function `maxabs`"));
         assert_eq!(d.hint.as_deref(), Some("did you mean `max_abs`?"));
         // A parameter where a signal belongs is said to be one.
-        let d = compile(&[spec("max_abs(k) < 3")], &headers, &[("k".into(), 1.0)]).unwrap_err();
+        let d = compile(&[spec("max_abs(k) < 3")], &headers, &[("k".into(), 1.0)], false).unwrap_err();
         assert_eq!(
             d.message,
             "check: `max_abs` takes a recorded signal first: `k` is a parameter, not a recorded signal"
         );
         // max/min of numbers stay the built-ins.
-        assert!(compile(&[spec("max(k, 1) < 3")], &headers, &[("k".into(), 1.0)]).is_ok());
+        assert!(compile(&[spec("max(k, 1) < 3")], &headers, &[("k".into(), 1.0)], false).is_ok());
         let d = err("final_value(y) = 1");
         assert!(d.message.contains("compares nothing"), "{d}");
         let d = err("overshoot(y) < 5");

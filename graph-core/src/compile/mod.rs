@@ -102,6 +102,12 @@ pub struct Model {
     pub file: std::sync::Arc<str>,
     /// What the solver's minor steps evaluate, integrate and hold.
     pub(crate) between: Between,
+    /// The `analysis:` section, its signals checked.
+    pub analysis: Option<crate::spec::Selection>,
+    /// The analysed loop's figures for the checks, indexed by
+    /// [`crate::checks::metrics::LoopFigure`] (filled in by whoever can
+    /// linearise: `ctlgraph::compile_flat`).
+    pub loop_figures: Option<Vec<f64>>,
 }
 
 struct Node<'g> {
@@ -218,7 +224,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
             outputs: m.outputs.clone(),
         })
         .collect();
-    let checks = crate::checks::compile(&g.checks, &headers(&columns), &g.parameters)?;
+    let checks = crate::checks::compile(&g.checks, &headers(&columns), &g.parameters, g.analysis.is_some())?;
     for scope in &g.scopes {
         for (name, pos) in &scope.signals {
             if !columns.iter().any(|c| &c.name == name) {
@@ -247,8 +253,18 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         name: g.name.clone(),
         file: g.file.clone(),
         between: Between::default(),
+        analysis: g.analysis.clone(),
+        loop_figures: None,
     };
     between::plan(&mut model, &piecewise);
+    if let Some(sel) = &model.analysis {
+        for name in [&sel.input, &sel.output, &sel.open].into_iter().flatten() {
+            if let Err(d) = model.signal_offset(name) {
+                let pos = sel.pos.clone();
+                return Err(Diagnostic { pos, message: format!("analysis: {}", d.message), ..d });
+            }
+        }
+    }
     Ok(model)
 }
 
@@ -282,6 +298,60 @@ impl Model {
     /// to LTI blocks stepped by their exact zero-order-hold transition.
     pub fn integrated_states(&self) -> usize {
         self.between.n_integrated
+    }
+
+    /// The signal buffer offset of `name`: `block`, `block.port`, with `[k]`
+    /// (1-based) for an element of a vector signal.
+    pub fn signal_offset(&self, name: &str) -> Result<usize, Diagnostic> {
+        let model = self;
+        let (base, element) = match name.strip_suffix(']').and_then(|n| n.split_once('[')) {
+            Some((b, k)) => {
+                let k: usize = k.parse().ok().filter(|k| *k >= 1).ok_or_else(|| {
+                    Diagnostic::plain(format!("signal `{name}`: `[{k}]` is not an element number (1, 2, …)"))
+                })?;
+                (b, Some(k))
+            }
+            None => (name, None),
+        };
+        let (block, port) = match model.meta.iter().position(|m| m.name == base) {
+            Some(i) => (i, None),
+            None => match base.rsplit_once('.') {
+                Some((b, p)) => {
+                    let i = model.meta.iter().position(|m| m.name == b).ok_or_else(|| {
+                        Diagnostic::plain(format!("signal `{name}`: no block `{b}`"))
+                            .suggest(b, model.meta.iter().map(|m| m.name.as_str()))
+                    })?;
+                    (i, Some(p))
+                }
+                None => {
+                    return Err(Diagnostic::plain(format!("signal `{name}`: no block `{base}`"))
+                        .suggest(base, model.meta.iter().map(|m| m.name.as_str())));
+                }
+            },
+        };
+        let meta = &model.meta[block];
+        let k = match port {
+            Some(p) => meta.output_names.iter().position(|n| n == p).ok_or_else(|| {
+                Diagnostic::plain(format!("signal `{name}`: block `{}` has no output `{p}`", meta.name))
+                    .with_hint(format!("its outputs: {}", meta.output_names.join(", ")))
+            })?,
+            None if meta.output_names.len() == 1 => 0,
+            None => {
+                return Err(Diagnostic::plain(format!("signal `{name}`: block `{}` has several outputs", meta.name))
+                    .with_hint(format!(
+                        "name one: {}",
+                        meta.output_names.iter().map(|p| format!("{base}.{p}")).collect::<Vec<_>>().join(", ")
+                    )));
+            }
+        };
+        let port = model.out_ports[meta.outputs.start + k];
+        match (element, port.width) {
+            (None, 1) => Ok(port.offset),
+            (None, w) => Err(Diagnostic::plain(format!("signal `{name}` has {w} elements"))
+                .with_hint(format!("analyse one: `{name}[1]` … `{name}[{w}]`"))),
+            (Some(k), w) if k <= w => Ok(port.offset + k - 1),
+            (Some(k), w) => Err(Diagnostic::plain(format!("signal `{name}`: element {k} of {w}"))),
+        }
     }
 
     /// The block owning signal `offset` and the name of its output port.

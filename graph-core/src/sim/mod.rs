@@ -260,6 +260,12 @@ impl Simulator {
         self.integ.method()
     }
 
+    /// The model, signals and states as they stand (for linearisation
+    /// around the point the run has reached).
+    pub(crate) fn operating_point(&mut self) -> (&mut Model, &mut [f64], &mut [f64]) {
+        (&mut self.model, &mut self.signals, &mut self.x)
+    }
+
     /// The signal buffer (index with [`crate::compile::Column`] offsets).
     pub fn signals(&self) -> &[f64] {
         &self.signals

@@ -1,0 +1,237 @@
+//! Linear analysis of a graph file: its linear model around an operating
+//! point ([`ctlgraph_core::linearize`]), frequency response, stability
+//! margins, bandwidth and poles ([`ctlgraph_solver::freq`]), as values,
+//! CSV, JSON and an SVG Bode plot.
+
+use crate::plot::PALETTE;
+use ctlgraph_core::checks::metrics::{LOOP_FIGURES, LoopFigure};
+use ctlgraph_core::linearize::{AnalysisError, Linearization, Selection, linearize};
+use ctlgraph_solver::freq::{self, Margins};
+use plotters::prelude::*;
+use serde_json::{Value, json};
+use std::path::Path;
+
+/// Loads, compiles and linearises a graph file; `sel` fields left empty
+/// are taken from the file's `analysis:` section.
+pub fn linearize_file(path: &Path, sets: &[(String, String)], sel: &Selection) -> Result<Linearization, AnalysisError> {
+    let model = ctlgraph_core::compile(&ctlgraph_core::load(path, sets)?, &crate::registry())?;
+    let sel = merged(sel, model.analysis.as_ref());
+    linearize(model, &sel)
+}
+
+/// The selection given, completed from the file's `analysis:` section
+/// (a command line that names any signal replaces the whole section).
+pub fn merged(given: &Selection, file: Option<&Selection>) -> Selection {
+    let names_any = given.input.is_some() || given.output.is_some() || given.open.is_some();
+    match file {
+        Some(f) if !names_any => Selection { at: if given.at > 0.0 { given.at } else { f.at }, ..f.clone() },
+        _ => given.clone(),
+    }
+}
+
+/// Magnitude (absolute) and unwrapped phase (degrees) over a frequency grid [rad/s].
+#[derive(Clone, Debug)]
+pub struct Bode {
+    pub w: Vec<f64>,
+    pub magnitude: Vec<f64>,
+    pub phase_deg: Vec<f64>,
+}
+
+/// The frequency response of `lin` at `points` frequencies from `from` to
+/// `to` (log-spaced; the model's own range when not given).
+pub fn bode(lin: &Linearization, range: Option<(f64, f64)>, points: usize) -> Bode {
+    let (from, to) = range.unwrap_or_else(|| freq::auto_range(&lin.system, None));
+    let w = freq::log_grid(from, to, points);
+    let values: Vec<_> = w.iter().map(|&w| freq::at_frequency(&lin.system, w, None)).collect();
+    Bode { magnitude: values.iter().map(|v| v.norm()).collect(), phase_deg: freq::unwrapped_phase_deg(&values), w }
+}
+
+/// Everything read off a loop transfer (or any transfer): margins, its own
+/// −3 dB bandwidth and, for a loop, the closed loop's L/(1 + L).
+#[derive(Clone, Copy, Debug)]
+pub struct Figures {
+    pub margins: Margins,
+    pub bandwidth: f64,
+    pub closed_loop_bandwidth: f64,
+}
+
+pub fn figures(lin: &Linearization) -> Figures {
+    let ss = &lin.system;
+    let margins = freq::margins(ss, None);
+    let (lo, hi) = freq::auto_range(ss, None);
+    let (lo, hi) = (lo / 1e3, hi * 1e3);
+    let g = |w: f64| freq::at_frequency(ss, w, None);
+    let dc = freq::evaluate(ss, 0.0.into());
+    let bandwidth = freq::bandwidth(g, dc, lo, hi);
+    let closed = |w: f64| {
+        let l = g(w);
+        l / (l + 1.0)
+    };
+    // L(0) infinite (an integrator in the loop): the closed loop's DC gain is 1.
+    let dc_closed = if dc.norm().is_finite() { dc / (dc + 1.0) } else { 1.0.into() };
+    let closed_loop_bandwidth = freq::bandwidth(closed, dc_closed, lo, hi);
+    Figures { margins, bandwidth, closed_loop_bandwidth }
+}
+
+/// The figures checks read, indexed by [`LoopFigure`], of the loop a
+/// compiled model's `analysis:` section selects, around its initial
+/// operating point. A run that fails at the operating point gives NaN
+/// (checks on them fail); a selection that cannot be linearised is an
+/// error in the graph.
+pub fn loop_figures(model: ctlgraph_core::Model) -> Result<Vec<f64>, ctlgraph_core::Diagnostic> {
+    let sel = model.analysis.clone().unwrap_or_default();
+    let lin = match linearize(model, &sel) {
+        Ok(lin) => lin,
+        Err(AnalysisError::Invalid(d)) => return Err(d),
+        Err(AnalysisError::Run(_)) => return Ok(vec![f64::NAN; LOOP_FIGURES.len()]),
+    };
+    let f = figures(&lin);
+    let m = &f.margins;
+    let mut values = vec![f64::NAN; LOOP_FIGURES.len()];
+    for (_, figure, _) in LOOP_FIGURES {
+        values[figure as usize] = match figure {
+            LoopFigure::PhaseMargin => m.phase_margin,
+            LoopFigure::GainMarginDb => 20.0 * m.gain_margin.log10(),
+            LoopFigure::DelayMargin => m.delay_margin,
+            LoopFigure::PeakSensitivity => m.peak_sensitivity,
+            LoopFigure::CrossoverFrequency => m.gain_crossover_freq,
+            LoopFigure::Bandwidth => f.bandwidth,
+            LoopFigure::ClosedLoopBandwidth => f.closed_loop_bandwidth,
+        };
+    }
+    Ok(values)
+}
+
+/// `w` [rad/s], `f` [Hz], magnitude, magnitude in dB, phase in degrees.
+pub fn bode_csv(b: &Bode) -> String {
+    let mut text = String::from("w,f,magnitude,magnitude_db,phase_deg\n");
+    for k in 0..b.w.len() {
+        let n = crate::record::Number;
+        text.push_str(&format!(
+            "{},{},{},{},{}\n",
+            n(b.w[k]),
+            n(b.w[k] / std::f64::consts::TAU),
+            n(b.magnitude[k]),
+            n(20.0 * b.magnitude[k].log10()),
+            n(b.phase_deg[k])
+        ));
+    }
+    text
+}
+
+/// A two-panel Bode plot (magnitude in dB, phase in degrees, over ω on a
+/// log axis) with the gain and phase crossovers marked and the margins in
+/// the legend.
+pub fn bode_svg(b: &Bode, m: &Margins, title: &str) -> Result<String, String> {
+    let (w0, w1) = (b.w[0], *b.w.last().unwrap_or(&b.w[0]));
+    let db: Vec<f64> = b.magnitude.iter().map(|v| 20.0 * v.log10()).collect();
+    let finite = |v: &[f64]| {
+        let f = v.iter().copied().filter(|x| x.is_finite());
+        let (lo, hi) = f.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+        if lo < hi { (lo - 0.05 * (hi - lo), hi + 0.05 * (hi - lo)) } else { (lo - 1.0, hi + 1.0) }
+    };
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1000, 640)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let root = root.titled(title, ("sans-serif", 22)).map_err(|e| e.to_string())?;
+        let (top, bottom) = root.split_vertically(300);
+        let crossings = [
+            (
+                m.gain_crossover_freq,
+                format!("phase margin {:.4}° at {:.4} rad/s", m.phase_margin, m.gain_crossover_freq),
+            ),
+            (
+                m.gain_crossover_phase_freq,
+                format!(
+                    "gain margin {:.4} dB at {:.4} rad/s",
+                    20.0 * m.gain_margin.log10(),
+                    m.gain_crossover_phase_freq
+                ),
+            ),
+        ];
+        for (area, values, label, y_desc) in
+            [(&top, &db, "|G| [dB]", "magnitude [dB]"), (&bottom, &b.phase_deg, "∠G [°]", "phase [°]")]
+        {
+            let (lo, hi) = finite(values);
+            let mut chart = ChartBuilder::on(area)
+                .margin(12)
+                .x_label_area_size(36)
+                .y_label_area_size(70)
+                .build_cartesian_2d((w0..w1).log_scale(), lo..hi)
+                .map_err(|e| e.to_string())?;
+            chart
+                .configure_mesh()
+                .x_desc("ω [rad/s]")
+                .y_desc(y_desc)
+                .light_line_style(RGBColor(235, 235, 235))
+                .draw()
+                .map_err(|e| e.to_string())?;
+            let color = PALETTE[0].to_rgba();
+            chart
+                .draw_series(LineSeries::new(b.w.iter().copied().zip(values.iter().copied()), color.stroke_width(2)))
+                .map_err(|e| e.to_string())?
+                .label(label)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2)));
+            for (k, (w, text)) in crossings.iter().enumerate() {
+                if w.is_finite() && (w0..=w1).contains(w) {
+                    let c = PALETTE[k + 1].to_rgba();
+                    chart
+                        .draw_series(LineSeries::new([(*w, lo), (*w, hi)], c.stroke_width(1)))
+                        .map_err(|e| e.to_string())?
+                        .label(text.as_str())
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(1)));
+                }
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::LowerLeft)
+                .draw()
+                .map_err(|e| e.to_string())?;
+        }
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}
+
+/// A number for JSON: `null` for NaN and infinities (JSON has none).
+fn num(v: f64) -> Value {
+    if v.is_finite() { json!(v) } else { Value::Null }
+}
+
+/// The linear model, its poles and (when given) its loop figures as JSON.
+pub fn to_json(lin: &Linearization, figures: Option<&Figures>) -> Value {
+    let ss = &lin.system;
+    let rows =
+        |m: &[f64], r: usize, c: usize| -> Vec<Vec<f64>> { (0..r).map(|i| m[i * c..(i + 1) * c].to_vec()).collect() };
+    let poles: Vec<Value> = freq::poles(ss)
+        .unwrap_or_default()
+        .iter()
+        .map(|p| {
+            let (wn, zeta) = freq::natural_frequency_and_damping(*p, None);
+            json!({ "re": p.re, "im": p.im, "natural_frequency": wn, "damping": zeta })
+        })
+        .collect();
+    let mut out = json!({
+        "input": lin.input, "output": lin.output, "loop_transfer": lin.loop_transfer, "at": lin.at,
+        "continuous": true,
+        "states": lin.states,
+        "a": rows(&ss.a, ss.n, ss.n), "b": rows(&ss.b, ss.n, 1), "c": rows(&ss.c, 1, ss.n), "d": rows(&ss.d, 1, 1),
+        "poles": poles,
+        "exact": lin.exact, "perturbed": lin.perturbed, "warnings": lin.warnings,
+    });
+    if let Some(f) = figures {
+        let m = &f.margins;
+        out["margins"] = json!({
+            "gain_margin": num(m.gain_margin), "gain_margin_db": num(20.0 * m.gain_margin.log10()),
+            "phase_crossover_frequency": num(m.gain_crossover_phase_freq),
+            "phase_margin_deg": num(m.phase_margin), "gain_crossover_frequency": num(m.gain_crossover_freq),
+            "delay_margin": num(m.delay_margin),
+            "peak_sensitivity": num(m.peak_sensitivity), "peak_sensitivity_frequency": num(m.peak_sensitivity_freq),
+            "bandwidth": num(f.bandwidth), "closed_loop_bandwidth": num(f.closed_loop_bandwidth),
+        });
+    }
+    out
+}
