@@ -40,9 +40,9 @@ pub struct Bode {
 /// The frequency response of `lin` at `points` frequencies from `from` to
 /// `to` (log-spaced; the model's own range when not given).
 pub fn bode(lin: &Linearization, range: Option<(f64, f64)>, points: usize) -> Bode {
-    let (from, to) = range.unwrap_or_else(|| freq::auto_range(&lin.system, None));
+    let (from, to) = range.unwrap_or_else(|| freq::auto_range(&lin.system, lin.sample_time));
     let w = freq::log_grid(from, to, points);
-    let values: Vec<_> = w.iter().map(|&w| freq::at_frequency(&lin.system, w, None)).collect();
+    let values: Vec<_> = w.iter().map(|&w| freq::at_frequency(&lin.system, w, lin.sample_time)).collect();
     Bode { magnitude: values.iter().map(|v| v.norm()).collect(), phase_deg: freq::unwrapped_phase_deg(&values), w }
 }
 
@@ -56,12 +56,16 @@ pub struct Figures {
 }
 
 pub fn figures(lin: &Linearization) -> Figures {
-    let ss = &lin.system;
-    let margins = freq::margins(ss, None);
-    let (lo, hi) = freq::auto_range(ss, None);
-    let (lo, hi) = (lo / 1e3, hi * 1e3);
-    let g = |w: f64| freq::at_frequency(ss, w, None);
-    let dc = freq::evaluate(ss, 0.0.into());
+    let (ss, st) = (&lin.system, lin.sample_time);
+    let margins = freq::margins(ss, st);
+    let (lo, hi) = freq::auto_range(ss, st);
+    let (lo, hi) = match st {
+        Some(t) => (lo / 1e3, std::f64::consts::PI / t),
+        None => (lo / 1e3, hi * 1e3),
+    };
+    let g = |w: f64| freq::at_frequency(ss, w, st);
+    // DC: s = 0, or z = 1.
+    let dc = freq::evaluate(ss, if st.is_some() { 1.0.into() } else { 0.0.into() });
     let bandwidth = freq::bandwidth(g, dc, lo, hi);
     let closed = |w: f64| {
         let l = g(w);
@@ -210,13 +214,14 @@ pub fn to_json(lin: &Linearization, figures: Option<&Figures>) -> Value {
         .unwrap_or_default()
         .iter()
         .map(|p| {
-            let (wn, zeta) = freq::natural_frequency_and_damping(*p, None);
+            let (wn, zeta) = freq::natural_frequency_and_damping(*p, lin.sample_time);
             json!({ "re": p.re, "im": p.im, "natural_frequency": wn, "damping": zeta })
         })
         .collect();
     let mut out = json!({
         "input": lin.input, "output": lin.output, "loop_transfer": lin.loop_transfer, "at": lin.at,
-        "continuous": true,
+        "continuous": lin.sample_time.is_none(),
+        "sample_time": lin.sample_time,
         "states": lin.states,
         "a": rows(&ss.a, ss.n, ss.n), "b": rows(&ss.b, ss.n, 1), "c": rows(&ss.c, 1, ss.n), "d": rows(&ss.d, 1, 1),
         "poles": poles,

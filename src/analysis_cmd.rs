@@ -68,7 +68,11 @@ fn describe(graph: &Path, lin: &Linearization) -> String {
     } else {
         format!("from `{}` to `{}`", lin.input, lin.output)
     };
-    format!("{}: {what}, around t = {}", graph.display(), lin.at)
+    let model = match lin.sample_time {
+        Some(t) => format!("; discrete model at the sample time T = {} s (continuous part by zero-order hold)", sig(t)),
+        None => String::new(),
+    };
+    format!("{}: {what}, around t = {}{model}", graph.display(), lin.at)
 }
 
 fn print_warnings(lin: &Linearization) {
@@ -136,7 +140,7 @@ pub(crate) fn bode(args: SelectArgs, grid: GridArgs) -> Result<(), Failure> {
         return Err(Diagnostic::plain(format!("--points {}: from 2 to 1000000", grid.points)).into());
     }
     let lin = args.linearize()?;
-    let auto = freq::auto_range(&lin.system, None);
+    let auto = freq::auto_range(&lin.system, lin.sample_time);
     let range = (grid.from.unwrap_or(auto.0), grid.to.unwrap_or(auto.1));
     if !(range.0 > 0.0 && range.1 > range.0 && range.1.is_finite()) {
         return Err(Diagnostic::plain(format!("--from {} --to {}: need 0 < from < to", range.0, range.1)).into());
@@ -144,7 +148,7 @@ pub(crate) fn bode(args: SelectArgs, grid: GridArgs) -> Result<(), Failure> {
     let b = analysis::bode(&lin, Some(range), grid.points);
     let f = analysis::figures(&lin);
     println!("{}", describe(&args.graph, &lin));
-    print_figures(&f);
+    print_figures(&f, lin.loop_transfer);
     print_warnings(&lin);
     if let Some(path) = &grid.csv {
         write_atomic(path, analysis::bode_csv(&b).as_bytes()).map_err(io_error(path))?;
@@ -161,17 +165,18 @@ pub(crate) fn bode(args: SelectArgs, grid: GridArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn print_figures(f: &Figures) {
+fn print_figures(f: &Figures, loop_transfer: bool) {
     let m = &f.margins;
     let at = |w: f64| if w.is_finite() { format!(" at {} rad/s", sig(w)) } else { String::new() };
     println!("  gain margin        {} dB{}", sig(20.0 * m.gain_margin.log10()), at(m.gain_crossover_phase_freq));
     println!("  phase margin       {} deg{}", sig(m.phase_margin), at(m.gain_crossover_freq));
     println!("  delay margin       {} s", sig(m.delay_margin));
     println!("  peak sensitivity   {}{}", sig(m.peak_sensitivity), at(m.peak_sensitivity_freq));
-    if f.bandwidth.is_finite() {
+    // A loop transfer's own bandwidth says nothing; its closed loop's does.
+    if f.bandwidth.is_finite() && !loop_transfer {
         println!("  bandwidth          {} rad/s", sig(f.bandwidth));
     }
-    if f.closed_loop_bandwidth.is_finite() {
+    if f.closed_loop_bandwidth.is_finite() && loop_transfer {
         println!("  closed-loop bandwidth of L/(1+L)  {} rad/s", sig(f.closed_loop_bandwidth));
     }
 }
@@ -190,7 +195,7 @@ pub(crate) fn poles(args: SelectArgs) -> Result<(), Failure> {
     println!("  {:<34} {:<18} damping", "pole", "wn [rad/s]");
     for p in poles.iter().filter(|p| p.im >= 0.0) {
         let p = ctlgraph_solver::freq::c64::new(clean(p.re), clean(p.im));
-        let (wn, zeta) = freq::natural_frequency_and_damping(p, None);
+        let (wn, zeta) = freq::natural_frequency_and_damping(p, lin.sample_time);
         let value = if p.im > 0.0 { format!("{} ± {}j", sig(p.re), sig(p.im)) } else { sig(p.re) };
         println!("  {value:<34} {:<18} {}", sig(wn), sig(zeta));
     }

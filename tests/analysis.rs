@@ -186,22 +186,91 @@ fn the_operating_point_is_where_the_run_is_at_the_given_time() {
 }
 
 #[test]
-fn discrete_blocks_and_delays_on_the_path_are_refused_with_the_reason() {
-    let with = |block: &str| {
+fn delays_mixed_rates_and_opaque_discrete_memory_are_refused_with_the_reason() {
+    let sel = Selection { input: Some("u".into()), output: Some("p".into()), ..Selection::default() };
+    let with = |block: &str, extra: &str| {
         format!(
-            "blocks:\n  u: {{ type: step }}\n  b: {block}\n  p: {{ type: transfer_function, num: [1], den: [1, 1] }}\nwires: [u -> b, b -> p]\n"
+            "blocks:\n  u: {{ type: step }}\n  b: {block}\n  p: {{ type: transfer_function, num: [1], den: [1, 1] }}{extra}\nwires: [u -> b, b -> p{}]\n",
+            if extra.is_empty() { "" } else { ", p -> c" }
         )
     };
-    let model = ctlgraph::compile_str(&with("{ type: unit_delay, sample_time: 0.01 }"), "test.yaml", &[]).unwrap();
-    let sel = Selection { input: Some("u".into()), output: Some("p".into()), ..Selection::default() };
-    let e = linearize(model, &sel).unwrap_err().to_string();
+    let error = |yaml: String| {
+        let model = ctlgraph::compile_str(&yaml, "test.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
+        linearize(model, &sel).unwrap_err().to_string()
+    };
+    let e = error(with("{ type: transport_delay, delay: 0.1 }", ""));
     assert!(
-        e.contains("test.yaml:3:") && e.contains("block `b` (unit_delay) is on the analysed path: it is discrete"),
+        e.contains("test.yaml:3:")
+            && e.contains("block `b` (transport_delay) is on the analysed path: a transport delay"),
         "{e}"
     );
-    let model = ctlgraph::compile_str(&with("{ type: transport_delay, delay: 0.1 }"), "test.yaml", &[]).unwrap();
-    let e = linearize(model, &sel).unwrap_err().to_string();
-    assert!(e.contains("block `b` (transport_delay) is on the analysed path: a transport delay"), "{e}");
+    let td = "blocks:\n  u: { type: step }\n  b: { type: tracking_differentiator, delta: 10, h0: 0.01, sample_time: 0.01 }\n  \
+              p: { type: transfer_function, num: [1], den: [1, 1] }\nwires: [u -> b, b.r1 -> p]\n";
+    let e = error(td.to_string());
+    assert!(
+        e.contains("block `b` (tracking_differentiator) is on the analysed path: it is discrete")
+            && e.contains("has no linear model"),
+        "{e}"
+    );
+    let e = error(with("{ type: unit_delay, sample_time: 0.01 }", "\n  c: { type: unit_delay, sample_time: 0.02 }"));
+    assert!(e.contains("several sample times (0.01, 0.02 s)"), "{e}");
+}
+
+#[test]
+fn a_discrete_pid_loop_has_the_hand_derived_sampled_data_model() {
+    // Plant 1/(s + a) held over T: x⁺ = Φ x + Γ u, Φ = e^(−aT), Γ = (1 − Φ)/a.
+    // Discrete PID (forward-Euler integral I, backward-Euler filter F,
+    // c = 1/(1 + N T)) on e = −x: I⁺ = I − T ki x, F⁺ = c F − (1 − c) x,
+    // u = I − kd N c F − (kp + kd N c) x. Opened at u, L = −u/u_injected.
+    let (a, t, kp, ki, kd, n) = (2.0, 0.05, 3.0, 4.0, 0.2, 50.0);
+    let yaml = format!(
+        "simulation: {{ stop: 1, solver: {{ method: rk4, step: {t} }} }}\nblocks:\n  r: {{ type: constant, value: 0 }}\n  \
+         e: {{ type: sum, signs: \"+-\" }}\n  ctrl: {{ type: pid, kp: {kp}, ki: {ki}, kd: {kd}, n: {n}, sample_time: {t} }}\n  \
+         plant: {{ type: transfer_function, num: [1], den: [1, {a}] }}\nwires: [r -> e.u1, plant -> e.u2, e -> ctrl, ctrl -> plant]\n"
+    );
+    let l = lin(&yaml, None, None, Some("ctrl"));
+    assert_eq!(l.sample_time, Some(t));
+    assert_eq!(l.states, ["plant", "ctrl.z1", "ctrl.z2"]);
+    let (phi, c) = ((-a * t).exp(), 1.0 / (1.0 + n * t));
+    let gamma = (1.0 - phi) / a;
+    let want_a = [phi, 0.0, 0.0, -t * ki, 1.0, 0.0, -(1.0 - c), 0.0, c];
+    let want_b = [gamma, 0.0, 0.0];
+    let want_c = [kp + kd * n * c, -1.0, kd * n * c];
+    let ss = &l.system;
+    for (got, want) in ss.a.iter().zip(want_a).chain(ss.b.iter().zip(want_b)).chain(ss.c.iter().zip(want_c)) {
+        assert!((got - want).abs() <= 1e-12 * want.abs().max(1.0), "{got} vs {want}: {ss:?}");
+    }
+    assert_eq!(ss.d, [0.0]);
+}
+
+#[test]
+fn the_ladrc_loop_matches_an_independent_sampled_data_model() {
+    // python-control: plant c2d(…, 1e-4, 'zoh'), the Euler LESO (β = 3ω0,
+    // ω0², ω0³) and the LSEF u = α1 e1 + α2 e2 − z3/b0 assembled by hand,
+    // opened at u: poles (eigvals) and stability_margins (frd method).
+    let model = ctlgraph::compile_file("graphs/fladrc/ladrc.yaml".as_ref(), &[]).unwrap();
+    let l = linearize(model, &Selection { open: Some("ctrl".into()), ..Selection::default() }).unwrap();
+    assert_eq!(l.sample_time, Some(1e-4));
+    let poles = freq::poles(&l.system).unwrap();
+    // numpy.linalg.eigvals; the first three also mpmath's to 17 digits.
+    let want: [(f64, f64); 5] = [
+        (0.7230707645761356, 0.0),
+        (0.9884646177119318, -0.0589742805022203),
+        (0.9884646177119318, 0.0589742805022203),
+        (0.9922083649418254, -0.012718485690632142),
+        (0.9922083649418254, 0.012718485690632142),
+    ];
+    for (re, im) in want {
+        assert!(
+            poles.iter().any(|p| (p.re - re).abs() < 1e-11 && (p.im - im).abs() < 1e-11),
+            "{re}{im:+}j not in {poles:?}"
+        );
+    }
+    let f = ctlgraph::analysis::figures(&l);
+    // python-control's frd fallback interpolates: agreement to 1e-5.
+    assert!(close(f.margins.phase_margin, 80.11968758556122, 1e-5), "{:?}", f.margins);
+    assert!(close(f.margins.gain_crossover_freq, 1420.4416013551488, 1e-5), "{:?}", f.margins);
+    assert!(close(f.margins.peak_sensitivity, 1.0695520294916638, 1e-6), "{:?}", f.margins);
 }
 
 #[test]
@@ -256,4 +325,44 @@ fn the_analysis_section_feeds_the_commands_and_the_checks() {
         err.contains(":7:11: analysis: signal `ctrll`: no block `ctrll`") && err.contains("did you mean `ctrl`?"),
         "{err}"
     );
+}
+
+/// Each discrete block's linear model, stepped as a recursion, gives the
+/// block's own simulated response to a unit step (checks `discrete_lti`
+/// against the blocks' `output`/`update`).
+#[test]
+fn discrete_linear_models_step_like_their_blocks() {
+    let t = 0.01;
+    for block in [
+        format!("{{ type: unit_delay, sample_time: {t} }}"),
+        format!("{{ type: delay, samples: 3, sample_time: {t} }}"),
+        format!("{{ type: discrete_transfer_function, num: [0.5, 0.2], den: [1, -0.6, 0.08], sample_time: {t} }}"),
+        format!("{{ type: impedance, m: 0.5, b: 2, k: 20, hold_input: true, sample_time: {t} }}"),
+        format!("{{ type: impedance, m: 0.5, b: 2, k: 20, method: backward_euler, sample_time: {t} }}"),
+        format!("{{ type: pid, kp: 2, ki: 3, kd: 0.1, n: 40, sample_time: {t} }}"),
+        format!("{{ type: leso, order: 2, omega: 30, b0: 2, sample_time: {t} }}"),
+    ] {
+        let wires = if block.contains("impedance") && block.contains("hold_input") {
+            "wires: [u -> b.e, zero -> b.hold]"
+        } else if block.contains("leso") {
+            "wires: [u -> b.y, u -> b.u]"
+        } else {
+            "wires: [u -> b]"
+        };
+        let (output, column) = if block.contains("leso") { ("b[2]", "y[2]") } else { ("b", "y") };
+        let yaml = format!(
+            "simulation: {{ stop: 0.2, solver: {{ method: rk4, step: {t} }} }}\nblocks:\n  u: {{ type: step }}\n  \
+             zero: {{ type: constant, value: 0 }}\n  b: {block}\n{wires}\nrecord: [y: b]\n"
+        );
+        let l = lin(&yaml, Some("u"), Some(output), None);
+        assert_eq!(l.sample_time, Some(t), "{block}");
+        let trace = common::run(&yaml);
+        let ss = &l.system;
+        let mut x = vec![0.0; ss.n];
+        for (k, &y) in trace.column(column).unwrap().iter().enumerate() {
+            let model = (0..ss.n).map(|j| ss.c[j] * x[j]).sum::<f64>() + ss.d[0];
+            assert!((model - y).abs() <= 1e-9 * y.abs().max(1.0), "{block}: step {k}: model {model} vs block {y}");
+            x = (0..ss.n).map(|i| (0..ss.n).map(|j| ss.a[i * ss.n + j] * x[j]).sum::<f64>() + ss.b[i]).collect();
+        }
+    }
 }

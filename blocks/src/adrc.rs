@@ -245,6 +245,27 @@ impl Leso {
 }
 
 impl Block for Leso {
+    /// The Euler step as matrices: z⁺ = (I + h·Ac) z + h·Bc [y, u], y = z,
+    /// with Ac the observer matrix (shift, minus β in the first column).
+    fn discrete_lti(&self) -> Option<ctlgraph_solver::StateSpace> {
+        if self.h <= 0.0 {
+            return None;
+        }
+        let n = self.beta.len();
+        let (mut a, mut b) = (vec![0.0; n * n], vec![0.0; n * 2]);
+        for i in 0..n {
+            a[i * n + i] = 1.0;
+            a[i * n] -= self.h * self.beta[i];
+            if i + 1 < n {
+                a[i * n + i + 1] += self.h;
+            }
+            b[i * 2] = self.h * self.beta[i];
+        }
+        b[(n - 2) * 2 + 1] = self.h * self.b0;
+        let c = (0..n * n).map(|k| if k / n == k % n { 1.0 } else { 0.0 }).collect();
+        Some(ctlgraph_solver::StateSpace { n, m: 2, p: n, a, b, c, d: vec![0.0; n * 2] })
+    }
+
     fn num_states(&self) -> usize {
         if self.h > 0.0 { 0 } else { self.beta.len() }
     }

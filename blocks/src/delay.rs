@@ -341,6 +341,23 @@ pub struct Delay {
 }
 
 impl Block for Delay {
+    /// A shift register of `samples` entries per element: y = oldest,
+    /// each update shifts by one and takes u (state k·w + j: element j,
+    /// k samples before the output; for samples = 1, z⁺ = u).
+    fn discrete_lti(&self) -> Option<ctlgraph_solver::StateSpace> {
+        let (w, s) = (self.initial.len(), self.samples);
+        let n = w * s;
+        let (mut a, mut b, mut c) = (vec![0.0; n * n], vec![0.0; n * w], vec![0.0; w * n]);
+        for j in 0..w {
+            c[j * n + j] = 1.0;
+            for k in 0..s - 1 {
+                a[(k * w + j) * n + (k + 1) * w + j] = 1.0;
+            }
+            b[((s - 1) * w + j) * w + j] = 1.0;
+        }
+        Some(ctlgraph_solver::StateSpace { n, m: w, p: w, a, b, c, d: vec![0.0; w * w] })
+    }
+
     fn set_width(&mut self, width: usize) -> Result<(), String> {
         self.initial = initial_vector(&self.initial, width)?;
         self.ring = vec![0.0; self.samples * width];

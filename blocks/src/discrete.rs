@@ -65,6 +65,10 @@ impl DiscreteLti {
 }
 
 impl Block for DiscreteLti {
+    fn discrete_lti(&self) -> Option<StateSpace> {
+        Some(self.ss.clone())
+    }
+
     fn initialize(&mut self, _x0: &mut [f64]) {
         self.x.iter_mut().for_each(|v| *v = 0.0);
     }
@@ -93,6 +97,9 @@ fn build_unit_delay(p: &mut Params) -> Result<Built, Diagnostic> {
 struct Hold;
 
 impl Block for Hold {
+    fn updates(&self) -> bool {
+        false
+    }
     fn output(&mut self, io: &mut Io) {
         for k in 0..io.output_width(0) {
             let v = io.u_at(0, k);

@@ -197,6 +197,13 @@ struct Holdable {
 }
 
 impl Block for Holdable {
+    /// The filter's model while not held (the hold input enters nowhere).
+    fn discrete_lti(&self) -> Option<ctlgraph_solver::StateSpace> {
+        let ss = self.filter.discrete_lti()?;
+        let widen = |m: &[f64], rows: usize| -> Vec<f64> { (0..rows).flat_map(|r| [m[r], 0.0]).collect() };
+        Some(ctlgraph_solver::StateSpace { m: 2, b: widen(&ss.b, ss.n), d: widen(&ss.d, ss.p), ..ss })
+    }
+
     fn initialize(&mut self, x0: &mut [f64]) {
         self.filter.initialize(x0);
         self.last = 0.0;

@@ -157,6 +157,27 @@ impl DiscretePid {
 }
 
 impl Block for DiscretePid {
+    /// Unsaturated, fixed gains: state [integral, filter], input e.
+    /// With a = 1/(1 + N·T): filter⁺ = a·filter + (1 − a)·e,
+    /// integral⁺ = integral + T·ki·e, u = integral − kd·N·a·filter + (kp + kd·N·a)·e.
+    fn discrete_lti(&self) -> Option<ctlgraph_solver::StateSpace> {
+        let l = &self.law;
+        if l.gain_ports.iter().any(Option::is_some) {
+            return None;
+        }
+        let a = 1.0 / (1.0 + l.n * self.period);
+        let kdn = l.kd * l.n;
+        Some(ctlgraph_solver::StateSpace {
+            n: 2,
+            m: 1,
+            p: 1,
+            a: vec![1.0, 0.0, 0.0, a],
+            b: vec![self.period * l.ki, 1.0 - a],
+            c: vec![1.0, -kdn * a],
+            d: vec![l.kp + kdn * a],
+        })
+    }
+
     fn initialize(&mut self, _x0: &mut [f64]) {
         self.integral = self.initial;
         self.filter = 0.0;

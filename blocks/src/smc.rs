@@ -124,6 +124,9 @@ impl Block for SlidingMode {
         io.set(1, s);
         io.set(2, d_hat);
     }
+    fn discrete_state(&mut self) -> Option<&mut [f64]> {
+        (self.period > 0.0).then(|| std::slice::from_mut(&mut self.d_hat))
+    }
     fn update(&mut self, io: &mut Io) {
         if self.period > 0.0 {
             let (_, s) = self.law(Self::inputs(io), self.d_hat);

@@ -399,6 +399,23 @@ pub trait Block: Send {
         None
     }
 
+    /// The block's linear model per sample hit when it is a discrete block
+    /// with memory that is linear (around where it stands): state z kept
+    /// by the block, z⁺ = A z + B u at the update, y = C z + D u at the
+    /// output, u and y all input and output elements in port order.
+    /// Linearisation of sampled-data paths needs it of every such block on
+    /// the path.
+    fn discrete_lti(&self) -> Option<StateSpace> {
+        None
+    }
+
+    /// The numbers a discrete block's `update` changes (its memory), for
+    /// linearising a nonlinear discrete block by perturbing them; blocks
+    /// with a [`Block::discrete_lti`] need not give it.
+    fn discrete_state(&mut self) -> Option<&mut [f64]> {
+        None
+    }
+
     /// The block's matrices when it is a continuous LTI system whose states
     /// are exactly the system's (transfer functions, zpk, state space): the
     /// simulator may then advance it by its exact zero-order-hold transition

@@ -108,6 +108,9 @@ pub struct Model {
     /// [`crate::checks::metrics::LoopFigure`] (filled in by whoever can
     /// linearise: `ctlgraph::compile_flat`).
     pub loop_figures: Option<Vec<f64>>,
+    /// Top-level subsystem outports by name (`sub.port`, `sub`) and the
+    /// real signal each carries (for analysis selections).
+    pub subsystem_outputs: Vec<(String, Port)>,
 }
 
 struct Node<'g> {
@@ -214,6 +217,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         }
     }
     let columns = record_columns(g, &nodes, &index, &direct, &out_offset)?;
+    let subsystem_outputs = wiring::subsystem_outputs(g, &nodes, &index, &direct, &out_offset);
     let slots = meta
         .iter()
         .map(|m| Slot {
@@ -255,6 +259,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         between: Between::default(),
         analysis: g.analysis.clone(),
         loop_figures: None,
+        subsystem_outputs,
     };
     between::plan(&mut model, &piecewise);
     if let Some(sel) = &model.analysis {
@@ -313,6 +318,14 @@ impl Model {
             }
             None => (name, None),
         };
+        if let Ok(k) = model.subsystem_outputs.binary_search_by(|(n, _)| n.as_str().cmp(base)) {
+            let port = model.subsystem_outputs[k].1;
+            return match element {
+                None if port.width == 1 => Ok(port.offset),
+                Some(e) if e <= port.width => Ok(port.offset + e - 1),
+                _ => Err(Diagnostic::plain(format!("signal `{name}` has {} elements", port.width))),
+            };
+        }
         let (block, port) = match model.meta.iter().position(|m| m.name == base) {
             Some(i) => (i, None),
             None => match base.rsplit_once('.') {

@@ -205,6 +205,37 @@ pub(super) fn resolve_widths(nodes: &mut [Node], drivers: &[Vec<Driver>]) -> Res
 
 /// The columns of the output: the `record:` list, or by default every
 /// output of every top-level block.
+/// The real signal behind each top-level subsystem outport, by the names a
+/// user writes: `sub.port`, and `sub` for a subsystem with one outport.
+pub(super) fn subsystem_outputs(
+    g: &FlatGraph,
+    nodes: &[Node],
+    index: &HashMap<&str, usize>,
+    direct: &[Vec<Option<Driver>>],
+    out_offset: &[Vec<Port>],
+) -> Vec<(String, Port)> {
+    let mut named = Vec::new();
+    for (sub, (_, outs)) in g.subsystems.iter().filter(|(s, _)| !s.contains('/')) {
+        for port in outs {
+            let Some(&(mut src)) = index.get(format!("{sub}/{port}").as_str()) else { continue };
+            let mut p = 0;
+            while nodes[src].is_virtual {
+                let Some(d) = &direct[src][0] else { break };
+                (src, p) = (d.src, d.port);
+            }
+            if nodes[src].is_virtual {
+                continue;
+            }
+            named.push((format!("{sub}.{port}"), out_offset[src][p]));
+            if outs.len() == 1 {
+                named.push((sub.clone(), out_offset[src][p]));
+            }
+        }
+    }
+    named.sort_by(|a, b| a.0.cmp(&b.0));
+    named
+}
+
 pub(super) fn record_columns(
     g: &FlatGraph,
     nodes: &[Node],
