@@ -71,6 +71,8 @@ impl std::fmt::Display for AnalysisError {
     }
 }
 
+impl std::error::Error for AnalysisError {}
+
 impl From<Diagnostic> for AnalysisError {
     fn from(d: Diagnostic) -> Self {
         AnalysisError::Invalid(d)
