@@ -120,18 +120,18 @@ pub fn linearize(model: Model, sel: &Selection) -> Result<Linearization, Analysi
         None => vec![0.0; at_hit.nv],
     };
     let rates = at_hit.driven_rates();
-    let (mut system, sample_time) = match rates.as_slice() {
-        [] => (continuous(&at_hit, &measured), None),
-        [(period, _)] => {
-            let period = *period;
-            let (exact, perturbed, warnings) =
-                (at_hit.exact.clone(), at_hit.perturbed.clone(), std::mem::take(&mut at_hit.warnings));
-            let held = sampled(at_hit, &measured, signals, x, u_at, open_at, period);
-            let mut lin_parts = held;
-            lin_parts.1.extend(exact);
-            lin_parts.2.extend(perturbed);
-            lin_parts.3.extend(warnings);
-            return Ok(finish(lin_parts, input, output, loop_transfer, t, Some(period)));
+    let (exact, perturbed) = named_on_path(&at_hit);
+    let mut warnings = std::mem::take(&mut at_hit.warnings);
+    let (mut system, states, sample_time) = match rates.as_slice() {
+        [] => (continuous(&at_hit, &measured), state_names(at_hit.model), None),
+        &[(period, _)] => {
+            let (system, states, more) = sampled(at_hit, &measured, (signals, x), (u_at, open_at), (t, period));
+            for w in more {
+                if !warnings.contains(&w) {
+                    warnings.push(w);
+                }
+            }
+            (system, states, Some(period))
         }
         _ => {
             let list: Vec<String> =
@@ -145,21 +145,9 @@ pub fn linearize(model: Model, sel: &Selection) -> Result<Linearization, Analysi
         }
     };
     if loop_transfer {
-        negate_output(&mut system);
+        system.c.iter_mut().chain(system.d.iter_mut()).for_each(|v| *v = -*v);
     }
-    let names = named_on_path(&at_hit);
-    Ok(Linearization {
-        system,
-        states: state_names(at_hit.model),
-        input,
-        output,
-        loop_transfer,
-        sample_time,
-        at: t,
-        exact: names.0,
-        perturbed: names.1,
-        warnings: at_hit.warnings,
-    })
+    Ok(Linearization { system, states, input, output, loop_transfer, sample_time, at: t, exact, perturbed, warnings })
 }
 
 /// The blocks on the path taken exactly and by perturbation, by name.
@@ -171,10 +159,6 @@ fn named_on_path(p: &Propagation) -> (Vec<String>, Vec<String>) {
         v
     };
     (names(&p.exact), names(&p.perturbed))
-}
-
-fn negate_output(ss: &mut StateSpace) {
-    ss.c.iter_mut().chain(ss.d.iter_mut()).for_each(|v| *v = -*v);
 }
 
 /// The continuous model: the rows' state and input columns (discrete
@@ -192,31 +176,26 @@ fn continuous(p: &Propagation, measured: &[f64]) -> StateSpace {
     }
 }
 
-/// What `sampled` hands back: the model, and the blocks taken exactly, by
-/// perturbation, and warnings of the interval pass.
-type Parts<'m> = (StateSpace, Vec<usize>, Vec<usize>, Vec<String>, &'m Model, Vec<String>);
-
 /// The sampled-data model at period T: state [x; z], from the rows at a
 /// hit (`at_hit`: outputs w of the discrete blocks and their next states,
 /// in x, z and u) and the continuous dynamics between hits under held w
-/// and u, discretised exactly: x⁺ = Φ x + Γ_w w + Γ_u u.
-fn sampled<'m>(
-    mut at_hit: Propagation<'m>,
+/// and u, discretised exactly: x⁺ = Φ x + Γ_w w + Γ_u u. Returns the
+/// model, its state names and the warnings of the pass between hits.
+fn sampled(
+    mut at_hit: Propagation,
     measured: &[f64],
-    signals: &mut [f64],
-    x: &mut [f64],
-    u_at: Option<usize>,
-    open_at: Option<usize>,
-    period: f64,
-) -> Parts<'m> {
+    (signals, x): (&mut [f64], &mut [f64]),
+    (u_at, open_at): (Option<usize>, Option<usize>),
+    (t, period): (f64, f64),
+) -> (StateSpace, Vec<String>, Vec<String>) {
     let (nx, nz) = (at_hit.nx, at_hit.nv - at_hit.nx - 1);
     let ns = nx + nz;
     // The held discrete outputs' rows at the hit, in Interval order.
     let w_rows = at_hit.discrete_output_rows();
     let next = std::mem::take(&mut at_hit.next);
     let discrete_names = std::mem::take(&mut at_hit.extra_names);
-    let model: &'m mut Model = at_hit.model;
-    let mut between = Propagation::new(model, 0.0, Mode::Interval);
+    let model = at_hit.model;
+    let mut between = Propagation::new(model, t, Mode::Interval);
     between.outputs(signals, x, u_at, open_at);
     between.dynamics(signals, x);
     let nw = w_rows.len();
@@ -247,42 +226,8 @@ fn sampled<'m>(
         b[nx + k] = next[k][ns];
     }
     let system = StateSpace { n: ns, m: 1, p: 1, a, b, c: measured[..ns].to_vec(), d: vec![measured[ns]] };
-    let (exact, perturbed, warnings) = (between.exact, between.perturbed, between.warnings);
-    let model: &'m Model = between.model;
-    (system, exact, perturbed, warnings, model, discrete_names)
-}
-
-fn finish(
-    parts: Parts,
-    input: String,
-    output: String,
-    loop_transfer: bool,
-    at: f64,
-    sample_time: Option<f64>,
-) -> Linearization {
-    let (mut system, exact, perturbed, mut warnings, model, discrete_names) = parts;
-    if loop_transfer {
-        negate_output(&mut system);
-    }
-    let name = |list: Vec<usize>| {
-        let mut v: Vec<String> = list.into_iter().map(|i| model.meta[i].name.clone()).collect();
-        v.sort();
-        v.dedup();
-        v
-    };
-    warnings.dedup();
-    Linearization {
-        states: state_names(model).into_iter().chain(discrete_names).collect(),
-        system,
-        input,
-        output,
-        loop_transfer,
-        sample_time,
-        at,
-        exact: name(exact),
-        perturbed: name(perturbed),
-        warnings,
-    }
+    let states = state_names(between.model).into_iter().chain(discrete_names).collect();
+    (system, states, between.warnings)
 }
 
 /// Names of the continuous states.
