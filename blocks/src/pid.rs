@@ -214,3 +214,6 @@ fn build_pid(p: &mut Params) -> Result<Built, Diagnostic> {
         None => Built::new(ContinuousPid { law, initial, holding: false }, iface),
     })
 }
+
+#[cfg(test)]
+mod tests;

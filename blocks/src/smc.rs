@@ -198,3 +198,6 @@ fn build_smc(p: &mut Params) -> Result<Built, Diagnostic> {
     let iface = iface.output("u", Width::Fixed(1)).output("s", Width::Fixed(1));
     Ok(Built::new(Smc { lambda, k, phi, equivalent }, iface))
 }
+
+#[cfg(test)]
+mod tests;
