@@ -157,4 +157,30 @@ mod tests {
         }
         assert!((rls.theta()[0] - 3.0).abs() < 1e-6);
     }
+
+    #[test]
+    fn the_block_outputs_the_estimate_and_error_before_each_update() {
+        // n = 1, P0 = 1, λ = 1, θ0 = 0.5; φ = 2, y = 3:
+        // e = 3 − 1 = 2, K = P0 φ/(λ + φ P0 φ) = 2/5, θ = 0.5 + 0.8 = 1.3, P = (1 − 0.8)/1 = 0.2.
+        use ctlgraph_core::block::Port;
+        let (ins, outs) = (
+            [Port { offset: 0, width: 1 }, Port { offset: 1, width: 1 }],
+            [Port { offset: 2, width: 1 }, Port { offset: 3, width: 1 }],
+        );
+        let mut rls = Rls::new(1, 1.0, 1.0, vec![0.5]);
+        rls.step(&[9.0], 9.0);
+        rls.initialize(&mut []);
+        let mut signals = [2.0, 3.0, f64::NAN, f64::NAN];
+        let mut step = |rls: &mut Rls| {
+            let mut io = Io::new(0.0, false, &[], &mut signals, &ins, &outs);
+            rls.output(&mut io);
+            rls.update(&mut io);
+            [signals[2], signals[3]]
+        };
+        assert_eq!(step(&mut rls), [0.5, 0.0]);
+        let [theta, error] = step(&mut rls);
+        assert!((theta - 1.3).abs() < 1e-15 && (error - 2.0).abs() < 1e-15, "{theta} {error}");
+        // The second update: Pφ = 0.4, K = 0.4/1.8, P = 0.2 − 0.4·0.4/1.8 = 1/9.
+        assert!((rls.p[0] - 1.0 / 9.0).abs() < 1e-15, "{}", rls.p[0]);
+    }
 }

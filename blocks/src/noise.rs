@@ -181,4 +181,36 @@ mod tests {
         let mu = u.iter().sum::<f64>() / u.len() as f64;
         assert!((mu - 0.5).abs() < 0.005);
     }
+
+    /// The block's output at successive sample hits, from `initialize` on.
+    fn outputs(block: &mut Noise, hits: usize) -> Vec<f64> {
+        let out = [ctlgraph_core::block::Port { offset: 0, width: 1 }];
+        let mut signal = [f64::NAN];
+        block.initialize(&mut []);
+        (0..hits)
+            .map(|_| {
+                let mut io = Io::new(0.0, false, &[], &mut signal, &[], &out);
+                block.output(&mut io);
+                block.update(&mut io);
+                signal[0]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_laws_scale_and_shift_the_stream_and_a_run_restarts_it() {
+        let mut reference = Stream::new(7);
+        let normal: Vec<f64> = (0..4).map(|_| 2.0 + 3.0 * reference.normal()).collect();
+        let law = Law::Normal { mean: 2.0, std: 3.0 };
+        let mut block = Noise { law, stream: Stream::new(7), value: 0.0 };
+        block.stream.normal();
+        assert_eq!(outputs(&mut block, 4), normal);
+        assert_eq!(outputs(&mut block, 4), normal);
+        reference.restart();
+        let uniform: Vec<f64> = (0..4).map(|_| 1.0 + 0.5 * (2.0 * reference.uniform() - 1.0)).collect();
+        let law = Law::Uniform { mean: 1.0, amplitude: 0.5 };
+        let mut block = Noise { law, stream: Stream::new(7), value: 0.0 };
+        assert_eq!(outputs(&mut block, 4), uniform);
+        assert!(uniform.iter().all(|u| (0.5..1.5).contains(u)));
+    }
 }

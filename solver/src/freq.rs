@@ -12,6 +12,9 @@ use faer::Mat;
 pub use faer::c64;
 use faer::linalg::solvers::Solve;
 
+#[cfg(test)]
+mod tests;
+
 /// A model's response at s (continuous) or z (discrete): C (sI − A)⁻¹ B + D.
 /// Infinite when sI − A is singular (a pole at s).
 pub fn evaluate(ss: &StateSpace, s: c64) -> c64 {

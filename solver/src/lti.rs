@@ -238,4 +238,38 @@ mod tests {
         let bad = StateSpace::new(vec![vec![0.0, 1.0]], vec![vec![0.0]], vec![vec![1.0]], vec![vec![0.0]]);
         assert!(matches!(bad, Err(LtiError::Shape(_))));
     }
+
+    #[test]
+    fn derivative_and_output_are_the_matrix_products() {
+        // Two states, two inputs, two outputs, every entry distinct:
+        // A x + B u = [2·1 + 3·(−1) + 5·0.5 + 7·2, −1·1 + 4·(−1) + 0.5·0.5 − 2·2] = [15.5, −8.75],
+        // C x + D u = [1 − 2·(−1) + 3·0.5, 0.5·1 + 6·(−1) + 0·0.5 − 1·2] = [4.5, −7.5].
+        let ss = StateSpace::new(
+            vec![vec![2.0, 3.0], vec![-1.0, 4.0]],
+            vec![vec![5.0, 7.0], vec![0.5, -2.0]],
+            vec![vec![1.0, -2.0], vec![0.5, 6.0]],
+            vec![vec![3.0, 0.0], vec![0.0, -1.0]],
+        )
+        .unwrap();
+        let (x, u) = ([1.0, -1.0], [0.5, 2.0]);
+        let mut dx = [f64::NAN; 2];
+        ss.derivative(&x, &u, &mut dx);
+        assert_eq!(dx, [15.5, -8.75]);
+        let mut y = [f64::NAN; 2];
+        ss.output(&x, &u, &mut y);
+        assert_eq!(y, [4.5, -7.5]);
+        ss.output_state_only(&x, &mut y);
+        assert_eq!(y, [3.0, -5.5]);
+        assert!(ss.has_feedthrough());
+        assert!(!tf2ss(&[1.0], &[1.0, 1.0]).unwrap().has_feedthrough());
+    }
+
+    #[test]
+    fn errors_say_what_is_wrong() {
+        let improper = LtiError::Improper { num_degree: 2, den_degree: 1 }.to_string();
+        assert_eq!(improper, "improper transfer function: numerator degree 2 exceeds denominator degree 1");
+        assert_eq!(LtiError::ZeroDenominator.to_string(), "the denominator is zero");
+        assert!(LtiError::TooHigh { degree: 101 }.to_string().starts_with("order 101 is above the limit of 100"));
+        assert!(matches!(tf2ss(&[1.0], &[1.0; 102]), Err(LtiError::TooHigh { degree: 101 })));
+    }
 }

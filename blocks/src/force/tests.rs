@@ -101,3 +101,65 @@ fn friction_opposes_the_motion_and_normal_force_recovers_n() {
         assert!((normal_force(fx, fz, climbing, 0.2, 0.2) - n).abs() < 1e-9, "vx = {vx}");
     }
 }
+
+fn ramp_contact() -> Contact {
+    // The surface z = 0.5·x: slope 0.5, |n| = √1.25.
+    let expr = Expr::parse("0.5*x", &VarScope { vars: &["x"], params: &[] }).unwrap();
+    Contact::new(Profile::Expr { expr, step: 1e-6 }, 1000.0, 10.0, 0.2)
+}
+
+#[test]
+fn contact_forces_on_a_ramp_by_hand() {
+    // Probe at (1, 0.3) moving (2, −1): δ = (0.5 − 0.3)/√1.25, δ' = (0.5·2 + 1)/√1.25,
+    // N = k δ + c δ' = 220/√1.25; sliding up the slope (v_t > 0), friction −μN along t.
+    // fx = −(N·nx − μN·tx) = 0.7 N/√1.25 = 123.2, fz = N·nz − μN·tz = 0.9 N/√1.25 = 158.4.
+    let contact = ramp_contact();
+    let (depth, rate, slope) = contact.penetration(1.0, 0.3, 2.0, -1.0);
+    let norm = 1.25f64.sqrt();
+    assert!((depth - 0.2 / norm).abs() < 1e-9 && (rate - 2.0 / norm).abs() < 1e-9 && (slope - 0.5).abs() < 1e-9);
+    let (fx, fz, n, s) = contact.forces(1.0, 0.3, 2.0, -1.0);
+    assert!((n - 220.0 / norm).abs() < 1e-6 && (s - 0.5).abs() < 1e-9, "{n} {s}");
+    assert!((fx - 123.2).abs() < 1e-6 && (fz - 158.4).abs() < 1e-6, "{fx} {fz}");
+    // Sliding down (vx = −2, vz = 0: v_t < 0) turns friction round: δ' = −1/√1.25,
+    // N = 190/√1.25, fx = 0.3 N/√1.25, fz = 1.1 N/√1.25.
+    let (fx, fz, n, _) = contact.forces(1.0, 0.3, -2.0, 0.0);
+    assert!((n - 190.0 / norm).abs() < 1e-6, "{n}");
+    assert!((fx - 0.3 * 190.0 / 1.25).abs() < 1e-6 && (fz - 1.1 * 190.0 / 1.25).abs() < 1e-6, "{fx} {fz}");
+    // Above the surface, or pulling away faster than the spring pushes: free.
+    assert_eq!(contact.forces(1.0, 0.6, 2.0, -1.0), (0.0, 0.0, 0.0, contact.forces(1.0, 0.6, 0.0, 0.0).3));
+    // vx = −50: δ' = −25/√1.25, k δ + c δ' = (200 − 250)/√1.25 < 0.
+    assert_eq!(contact.forces(1.0, 0.3, -50.0, 0.0).2, 0.0);
+    // Frozen in the pressing mode inside a solver step, N goes negative.
+    let (_, _, n, _) = contact.forces_in_mode(1.0, 0.3, -50.0, 0.0, Some(true));
+    assert!((n + 50.0 / norm).abs() < 1e-6, "{n}");
+}
+
+#[test]
+fn the_reference_filter_is_a_second_order_lag() {
+    // p'' = ωn²(u − p) − 2ζωn p' = 100·1.5 − 2·0.7·10·3 = 108.
+    let f = ReferenceFilter { omega: 10.0, zeta: 0.7, initial: 0.0 };
+    assert!((f.accel(2.0, &[0.5, 3.0]) - 108.0).abs() < 1e-12);
+}
+
+#[test]
+fn the_continuous_impedance_is_its_ode_and_stands_still_when_held() {
+    // m x'' + b x' + k x = e: x'' = (3 − 0.5·2 − 4·0.25)/2 = 0.5.
+    use ctlgraph_core::block::Port;
+    let mut z = Impedance { m: 2.0, b: 0.5, k: 4.0 };
+    assert_eq!(z.num_states(), 2);
+    let x = [0.25, 2.0];
+    let derivatives = |z: &mut Impedance, inputs: &[f64]| {
+        let ports: Vec<Port> = (0..inputs.len()).map(|offset| Port { offset, width: 1 }).collect();
+        let out = [Port { offset: inputs.len(), width: 1 }];
+        let mut signals = inputs.to_vec();
+        signals.push(f64::NAN);
+        let mut io = Io::new(0.0, false, &x, &mut signals, &ports, &out);
+        z.output(&mut io);
+        let mut dx = [f64::NAN; 2];
+        z.derivatives(&io, &mut dx);
+        (signals[inputs.len()], dx)
+    };
+    assert_eq!(derivatives(&mut z, &[3.0]), (0.25, [2.0, 0.5]));
+    assert_eq!(derivatives(&mut z, &[3.0, 0.0]), (0.25, [2.0, 0.5]));
+    assert_eq!(derivatives(&mut z, &[3.0, 1.0]), (0.25, [0.0, 0.0]));
+}

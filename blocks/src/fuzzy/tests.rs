@@ -122,6 +122,13 @@ fn membership_functions_at_their_corners() {
     assert_eq!(Mf::Trap(0.0, 1.0, 2.0, 4.0).eval(1.5), 1.0);
     assert!((Mf::Gauss(0.5, 1.0).eval(1.5) - (-0.5f64).exp()).abs() < 1e-15);
     assert_eq!(Mf::Bell(2.0, 3.0, 1.0).eval(3.0), 0.5);
+    // 1/(1 + |(x − c)/a|^(2b)) = 1/(1 + 0.5⁶).
+    assert_eq!(Mf::Bell(2.0, 3.0, 1.0).eval(2.0), 64.0 / 65.0);
+    // Shoulders (a = b, c = d) are 1 at their edges, 0 just outside.
+    assert_eq!(Mf::Trap(0.0, 0.0, 2.0, 4.0).eval(0.0), 1.0);
+    assert_eq!(Mf::Trap(0.0, 1.0, 2.0, 2.0).eval(2.0), 1.0);
+    assert_eq!(Mf::Trap(0.0, 0.0, 2.0, 2.0).eval(-1e-12), 0.0);
+    assert_eq!(Mf::Trap(0.0, 0.0, 2.0, 2.0).eval(2.0 + 1e-12), 0.0);
 }
 
 #[test]
@@ -145,6 +152,21 @@ fn sugeno_is_a_weighted_average() {
     assert!(y[0].abs() < 1e-15);
     fis.eval(&[1.0], &mut y);
     assert_eq!(y[0], 3.0);
+    // Terms that do not sum to 1: N = trimf(0, 0, 0.8), P = trimf(0.6, 1, 1) at
+    // 0.7 weigh 0.125 and 0.25, y = (−0.125 + 0.75)/0.375 = 5/3. With a gap
+    // between them (N ends at 0.4) nothing fires at 0.5: the output's midpoint, 1.
+    let sugeno = |n_end: f64| {
+        let mut fis = fis.clone();
+        fis.inputs[0].terms = vec![("N".into(), Mf::Tri(0.0, 0.0, n_end)), ("P".into(), Mf::Tri(0.6, 1.0, 1.0))];
+        Fis::new(fis.inputs, fis.outputs, fis.rules, Methods::default(), true)
+    };
+    sugeno(0.8).eval(&[0.7], &mut y);
+    assert!((y[0] - 5.0 / 3.0).abs() < 1e-14, "{}", y[0]);
+    let mut gap = sugeno(0.4);
+    gap.eval(&[0.5], &mut y);
+    assert_eq!(y[0], 1.0);
+    gap.eval(&[0.3], &mut y);
+    assert_eq!(y[0], -1.0);
 }
 
 /// Negation, OR (max and probabilistic), sum aggregation of min implication
@@ -204,4 +226,51 @@ fn negation_or_and_sum_aggregation_match_an_independent_transcription() {
     let mut out = [f64::NAN];
     fis.eval(&[1.5], &mut out);
     assert_eq!(out[0], 2.0);
+}
+
+#[test]
+fn defuzzification_of_piecewise_linear_memberships_by_hand() {
+    // Exact areas of trapezoids (checked against a 400 000-point midpoint
+    // integration): μ = [0, 1, 0.5, 0] on [0, 1, 2, 3] has area 1.5 and
+    // moment 2, so the centroid is 4/3; half the area, 0.75, is reached in
+    // the falling segment μ = 1 − (x − 1)/2 at x = 3 − √3.
+    use Defuzzification::*;
+    let d = |x: &[f64], mu: &[f64], m| defuzzify(x, mu, m).unwrap();
+    let (x, mu) = ([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 0.5, 0.0]);
+    assert!((d(&x, &mu, Centroid) - 4.0 / 3.0).abs() < 1e-15);
+    assert!((d(&x, &mu, Bisector) - (3.0 - 3f64.sqrt())).abs() < 1e-15);
+    // Rising then falling: area 2, centroid 89/60, the bisector at 1 + (1 − √0.76)/0.3.
+    let (x3, mu3) = ([0.0, 1.0, 3.0], [0.2, 1.0, 0.4]);
+    assert!((d(&x3, &mu3, Centroid) - 89.0 / 60.0).abs() < 1e-15);
+    assert!((d(&x3, &mu3, Bisector) - (1.0 + (1.0 - 0.76f64.sqrt()) / 0.3)).abs() < 1e-14);
+    // A plateau: centroid 9/5; the bisector falls on the flat top (x1 + need/μ).
+    let (x, mu) = ([0.0, 1.0, 2.0, 3.0, 4.0], [0.0, 1.0, 1.0, 0.5, 0.0]);
+    assert!((d(&x, &mu, Centroid) - 1.8).abs() < 1e-15);
+    assert!((d(&x, &mu, Bisector) - 1.75).abs() < 1e-15);
+    assert_eq!(
+        [d(&x, &mu, SmallestOfMaximum), d(&x, &mu, LargestOfMaximum), d(&x, &mu, MeanOfMaximum)],
+        [1.0, 2.0, 1.5]
+    );
+    assert_eq!(defuzzify(&x, &[0.0; 5], Centroid), None);
+    // A segment with no area adds nothing (not 0/0): centroid (5/3 + 7/3)/2 = 2.
+    assert_eq!(d(&[0.0, 1.0, 2.0, 3.0], &[0.0, 0.0, 1.0, 0.0], Centroid), 2.0);
+    // The bisector inside a segment starting below 1: μ = 0.5 + x/2 on [0, 1],
+    // area to u = u/2 + u²/4 = 0.625 at u = 2√0.875 − 1.
+    let b = d(&[0.0, 1.0, 2.0], &[0.5, 1.0, 0.0], Bisector);
+    assert!((b - (2.0 * 0.875f64.sqrt() - 1.0)).abs() < 1e-15, "{b}");
+}
+
+#[test]
+fn uniform_terms_reach_their_neighbours_peaks() {
+    assert_eq!(standard_names(3), Some(&["N", "Z", "P"][..]));
+    assert_eq!(standard_names(2), Some(&["N", "P"][..]));
+    assert_eq!(standard_names(5).map(|n| n[2]), Some("ZO"));
+    assert_eq!(standard_names(7), Some(&NAMES[..]));
+    assert_eq!(standard_names(4), None);
+    let terms = uniform_triangles(-1.0, 3.0, &["N", "Z", "P"]);
+    let mfs: Vec<Mf> = terms.iter().map(|t| t.1).collect();
+    assert_eq!(mfs, [Mf::Tri(-1.0, -1.0, 1.0), Mf::Tri(-1.0, 1.0, 3.0), Mf::Tri(1.0, 3.0, 3.0)]);
+    // The last peak is the upper edge itself, not −0.3 + 6·0.2 = 0.8999999999999999.
+    let terms = uniform_triangles(-0.3, 0.9, &NAMES);
+    assert!(matches!(terms[6].1, Mf::Tri(_, 0.9, 0.9)) && matches!(terms[5].1, Mf::Tri(_, _, 0.9)));
 }

@@ -81,18 +81,32 @@ fn continuous_adaptation_stops_at_the_bounds() {
     let mut x0 = [5.0];
     b.initialize(&mut x0);
     assert_eq!(x0, [0.0]);
-    let derivative = |b: &mut SlidingMode, d_hat: f64| {
+    let derivative_at = |b: &mut SlidingMode, inputs: &[f64; 5], d_hat: f64| {
         let mut signals = [0.0; 8];
-        signals[..5].copy_from_slice(&INPUTS);
+        signals[..5].copy_from_slice(inputs);
         let x = [d_hat];
         let io = Io::new(0.0, false, &x, &mut signals, &IN, &OUT);
         let mut dx = [0.0];
         b.derivatives(&io, &mut dx);
         dx[0]
     };
-    // d̂' = ρ·S = 1212 inside; 0 at d_max pushing up; S < 0 at d_max integrates down.
+    let derivative = |b: &mut SlidingMode, d_hat: f64| derivative_at(b, &INPUTS, d_hat);
+    // d̂' = ρ·S = 1212 inside and at d_min pushing up; 0 at d_max pushing up.
     assert!((derivative(&mut b, 0.5) - 1212.0).abs() < 1e-9);
+    assert!((derivative(&mut b, -1.0) - 1212.0).abs() < 1e-9);
     assert_eq!(derivative(&mut b, 1.0), 0.0);
+    // With x past the reference, S = 200·(1 − 1.2) + 0.4 = −39.6, ρS = −1188:
+    // 0 at d_min, integrating down from d_max.
+    let past = [1.0, 0.5, 2.0, 1.2, 0.1];
+    assert_eq!(derivative_at(&mut b, &past, -1.0), 0.0);
+    assert!((derivative_at(&mut b, &past, 1.0) + 1188.0).abs() < 1e-9);
+    assert!((derivative_at(&mut b, &past, 0.0) + 1188.0).abs() < 1e-9);
+    // The continuous block reads d̂ from its state, and has one.
+    let mut signals = [0.0; 8];
+    signals[..5].copy_from_slice(&INPUTS);
+    b.output(&mut Io::new(0.0, false, &[0.3], &mut signals, &IN, &OUT));
+    assert_eq!(signals[7], 0.3);
+    assert_eq!((b.num_states(), block(1e-3, 1.0).num_states()), (1, 0));
     let mut clamped = [1.5];
     assert!(b.clamp_states(&mut clamped) && clamped == [1.0]);
     let mut inside = [0.5];
@@ -122,4 +136,6 @@ fn first_order_law_with_and_without_boundary_layer() {
     let mut sign = Smc { lambda: 4.0, k: 3.0, phi: 0.0, equivalent: false };
     assert_eq!(out(&mut sign, 0.1, 0.2, 7.0).0, 3.0);
     assert_eq!(out(&mut sign, -0.1, 0.2, 7.0).0, -3.0);
+    // On the surface, S = 0: no switching (not 0/0).
+    assert_eq!(out(&mut sign, 0.0, 0.0, 7.0), (0.0, 0.0));
 }
