@@ -283,3 +283,58 @@ fn build_integrator(p: &mut Params) -> Result<Built, Diagnostic> {
     };
     Ok(Built::new(block, iface))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn limited(n: usize, reset: Option<Trigger>) -> Integrator {
+        Integrator {
+            initial: vec![0.0; n],
+            x0: vec![0.0; n],
+            lower: -1.0,
+            upper: 2.0,
+            limited: true,
+            modes: vec![Mode::Free; n],
+            reset,
+            reset_port: 1,
+            initial_port: None,
+            last_reset: f64::NAN,
+            located: false,
+            started: false,
+        }
+    }
+
+    #[test]
+    fn an_element_holds_on_a_limit_only_while_pushed_into_it() {
+        let b = limited(1, None);
+        assert_eq!(b.mode_for(2.0, 0.5), Mode::AtUpper);
+        assert_eq!(b.mode_for(2.5, 0.5), Mode::AtUpper);
+        assert_eq!(b.mode_for(2.0, 0.0), Mode::Free);
+        assert_eq!(b.mode_for(2.0, -0.5), Mode::Free);
+        assert_eq!(b.mode_for(1.9, 0.5), Mode::Free);
+        assert_eq!(b.mode_for(-1.0, -0.5), Mode::AtLower);
+        assert_eq!(b.mode_for(-1.5, -0.5), Mode::AtLower);
+        assert_eq!(b.mode_for(-1.0, 0.0), Mode::Free);
+        assert_eq!(b.mode_for(-1.0, 0.5), Mode::Free);
+        assert_eq!(b.mode_for(-0.9, -0.5), Mode::Free);
+    }
+
+    #[test]
+    fn the_reset_crossing_follows_the_limit_crossings() {
+        // Two crossing functions per limited element come first.
+        assert_eq!(limited(3, Some(Trigger::Rising)).reset_function(), 6);
+        let mut free = limited(3, Some(Trigger::Rising));
+        free.limited = false;
+        assert_eq!(free.reset_function(), 0);
+        // A located crossing resets whatever the trigger; without one, the
+        // trigger judges the change since the last major step.
+        let mut b = limited(1, None);
+        assert!(!b.resetting(1.0));
+        b.located = true;
+        assert!(b.resetting(1.0));
+        let mut rising = limited(1, Some(Trigger::Rising));
+        rising.last_reset = -1.0;
+        assert!(rising.resetting(1.0) && !rising.resetting(-2.0));
+    }
+}

@@ -242,8 +242,8 @@ mod tests {
     #[test]
     fn derivative_and_output_are_the_matrix_products() {
         // Two states, two inputs, two outputs, every entry distinct:
-        // A x + B u = [2·1 + 3·(−1) + 5·0.5 + 7·2, −1·1 + 4·(−1) + 0.5·0.5 − 2·2] = [15.5, −8.75],
-        // C x + D u = [1 − 2·(−1) + 3·0.5, 0.5·1 + 6·(−1) + 0·0.5 − 1·2] = [4.5, −7.5].
+        // A x + B u = [2·1 + 3·(−2) + 5·0.5 + 7·2, −1·1 + 4·(−2) + 0.5·0.5 − 2·2] = [12.5, −12.75],
+        // C x + D u = [1 − 2·(−2) + 3·0.5, 0.5·1 + 6·(−2) + 0·0.5 − 1·2] = [6.5, −13.5].
         let ss = StateSpace::new(
             vec![vec![2.0, 3.0], vec![-1.0, 4.0]],
             vec![vec![5.0, 7.0], vec![0.5, -2.0]],
@@ -251,17 +251,27 @@ mod tests {
             vec![vec![3.0, 0.0], vec![0.0, -1.0]],
         )
         .unwrap();
-        let (x, u) = ([1.0, -1.0], [0.5, 2.0]);
+        let (x, u) = ([1.0, -2.0], [0.5, 2.0]);
         let mut dx = [f64::NAN; 2];
         ss.derivative(&x, &u, &mut dx);
-        assert_eq!(dx, [15.5, -8.75]);
+        assert_eq!(dx, [12.5, -12.75]);
         let mut y = [f64::NAN; 2];
         ss.output(&x, &u, &mut y);
-        assert_eq!(y, [4.5, -7.5]);
+        assert_eq!(y, [6.5, -13.5]);
         ss.output_state_only(&x, &mut y);
-        assert_eq!(y, [3.0, -5.5]);
+        assert_eq!(y, [5.0, -11.5]);
         assert!(ss.has_feedthrough());
         assert!(!tf2ss(&[1.0], &[1.0, 1.0]).unwrap().has_feedthrough());
+    }
+
+    #[test]
+    fn zpk_expands_to_polynomials() {
+        // 4 (s + 1) / ((s + 2)(s + 3)); a conjugate pair −1 ± 2j gives s² + 2 s + 5.
+        let c = |re: f64, im: f64| Complex::new(re, im);
+        let (num, den) = zpk2tf(&[c(-1.0, 0.0)], &[c(-2.0, 0.0), c(-3.0, 0.0)], 4.0).unwrap();
+        assert_eq!((num, den), (vec![4.0, 4.0], vec![1.0, 5.0, 6.0]));
+        let (num, den) = zpk2tf(&[], &[c(-1.0, 2.0), c(-1.0, -2.0)], 0.5).unwrap();
+        assert_eq!((num, den), (vec![0.5], vec![1.0, 2.0, 5.0]));
     }
 
     #[test]
@@ -271,5 +281,6 @@ mod tests {
         assert_eq!(LtiError::ZeroDenominator.to_string(), "the denominator is zero");
         assert!(LtiError::TooHigh { degree: 101 }.to_string().starts_with("order 101 is above the limit of 100"));
         assert!(matches!(tf2ss(&[1.0], &[1.0; 102]), Err(LtiError::TooHigh { degree: 101 })));
+        assert_eq!(tf2ss(&[1.0], &[1.0; MAX_ORDER + 1]).map(|ss| ss.n), Ok(MAX_ORDER));
     }
 }

@@ -127,6 +127,18 @@ fn contact_forces_on_a_ramp_by_hand() {
     assert!((fx - 0.3 * 190.0 / 1.25).abs() < 1e-6 && (fz - 1.1 * 190.0 / 1.25).abs() < 1e-6, "{fx} {fz}");
     // Above the surface, or pulling away faster than the spring pushes: free.
     assert_eq!(contact.forces(1.0, 0.6, 2.0, -1.0), (0.0, 0.0, 0.0, contact.forces(1.0, 0.6, 0.0, 0.0).3));
+    // A level surface z = 0.25 pressed straight down at 1 m/s from 5 cm deep:
+    // no tangential speed, so no friction; N = 1000·0.05 + 10·1 = 60.
+    let expr = Expr::parse("0.25", &VarScope { vars: &["x"], params: &[] }).unwrap();
+    let level = Contact::new(Profile::Expr { expr, step: 1e-6 }, 1000.0, 10.0, 0.2);
+    let (fx, fz, n, _) = level.forces(1.0, 0.2, 0.0, -1.0);
+    assert!(fx == 0.0 && (fz - 60.0).abs() < 1e-12 && (n - 60.0).abs() < 1e-12, "{fx} {fz} {n}");
+    // On the surface (δ = 0) and pressing into it: contact begins, no force yet.
+    assert_eq!(level.forces(1.0, 0.25, 0.0, -1.0).2, 0.0);
+    // (0.45, −1) is just downhill: v_t = (0.45 − 0.5)/√1.25 < 0, friction along +t;
+    // N = (200 + 10·1.225)/√1.25, fx = 0.3 N/√1.25 = 50.94, fz = 1.1 N/√1.25 = 186.78.
+    let (fx, fz, _, _) = contact.forces(1.0, 0.3, 0.45, -1.0);
+    assert!((fx - 50.94).abs() < 1e-6 && (fz - 186.78).abs() < 1e-6, "{fx} {fz}");
     // vx = −50: δ' = −25/√1.25, k δ + c δ' = (200 − 250)/√1.25 < 0.
     assert_eq!(contact.forces(1.0, 0.3, -50.0, 0.0).2, 0.0);
     // Frozen in the pressing mode inside a solver step, N goes negative.

@@ -118,3 +118,59 @@ fn blow_up_is_reported_not_looped_on() {
     assert!(result.is_err(), "x = 1/(1-t) must blow up near t = 1, got t = {t}");
     assert!(t < 1.001, "t = {t}, x = {:?}, {result:?}", x);
 }
+
+#[test]
+fn method_step_limits_and_names() {
+    let dopri = Method::DormandPrince { rtol: 1e-6, atol: 1e-9, max_step: 0.25, initial_step: None };
+    let trbdf2 = Method::Trbdf2 { rtol: 1e-6, atol: 1e-9, max_step: 0.5, initial_step: None };
+    assert_eq!((Method::Rk4 { step: 1e-3 }.max_step(), dopri.max_step(), trbdf2.max_step()), (1e-3, 0.25, 0.5));
+    // Defaults for a 4 s run: dopri5 200 samples, trbdf2 10, fixed steps their own.
+    assert_eq!((dopri.default_max_step(4.0), trbdf2.default_max_step(4.0)), (0.02, 0.4));
+    assert_eq!(Method::Euler { step: 0.1 }.default_max_step(4.0), 0.1);
+    assert_eq!(dopri.with_max_step(0.125).max_step(), 0.125);
+    assert_eq!(Method::Heun { step: 0.1 }.with_max_step(0.125).max_step(), 0.1);
+    assert!(dopri.is_adaptive() && trbdf2.is_adaptive() && !Method::Rk4 { step: 1e-3 }.is_adaptive());
+}
+
+/// x' = p·t^(p−1), x(0) = 0: x(1) = 1, the rate depending on t only.
+struct Power(i32);
+impl OdeSystem for Power {
+    fn derivatives(&mut self, t: f64, _x: &[f64], dx: &mut [f64]) {
+        dx[0] = self.0 as f64 * t.powi(self.0 - 1);
+    }
+}
+
+#[test]
+fn stage_times_integrate_polynomials_in_t_exactly() {
+    // A method of order p is a quadrature exact for t^(p−1) only if its
+    // stages are evaluated at the tableau's times c·h (an autonomous test
+    // problem cannot tell wrong c from right ones).
+    let pinned = |step: f64| Method::DormandPrince { rtol: 1e9, atol: 1e9, max_step: step, initial_step: Some(step) };
+    let trbdf2 = Method::Trbdf2 { rtol: 1e9, atol: 1e9, max_step: 0.25, initial_step: Some(0.25) };
+    for (method, p) in
+        [(Method::Heun { step: 0.25 }, 2), (Method::Rk4 { step: 0.25 }, 4), (pinned(0.25), 5), (trbdf2, 2)]
+    {
+        let mut integ = Integrator::new(method, 1);
+        let (mut t, mut x) = (0.0, [0.0]);
+        for k in 1..=4 {
+            t = integ.advance(&mut Power(p), t, k as f64 * 0.25, &mut x).unwrap();
+        }
+        assert!(t == 1.0 && (x[0] - 1.0).abs() < 1e-13, "{} on t^{}: x(1) = {}", method.name(), p - 1, x[0]);
+    }
+}
+
+#[test]
+fn a_step_lands_on_the_limit_rather_than_leave_a_sliver() {
+    let trial = |h: f64| {
+        let mut h = h;
+        let (lands, end) = trial_step(1.0, 2.0, &mut h, None).unwrap();
+        (lands, end, h)
+    };
+    // Within 1 % of the span (0.995: 0.005 left over < 1 % of h) it stretches to land.
+    assert_eq!(trial(0.995), (true, 2.0, 1.0));
+    assert_eq!(trial(1.5), (true, 2.0, 1.0));
+    // 0.98 leaves 0.02, more than 1 % of the step: taken as is.
+    assert_eq!(trial(0.98), (false, 1.98, 0.98));
+    let mut tiny = 1e-300;
+    assert!(matches!(trial_step(1.0, 2.0, &mut tiny, Some(3)), Err(SolverError::StepTooSmall { state: Some(3), .. })));
+}
