@@ -363,28 +363,25 @@ impl Simulator {
         if !all_finite(&self.signals)
             && let Some(k) = self.signals.iter().position(|v| !v.is_finite())
         {
-            let value = self.signals[k];
-            let Some((i, port)) = self.model.signal_owner(k) else {
-                return Err(SimError::NonFinite {
-                    t: self.t,
-                    block: "?".into(),
-                    what: "a signal".into(),
-                    value,
-                    inputs: vec![],
-                });
+            let owner = self.model.signal_owner(k);
+            let what = match owner {
+                Some((i, port)) => match self.model.blocks[i].diagnose() {
+                    Some(why) => format!("output `{port}`: {why}"),
+                    None => format!("output `{port}`"),
+                },
+                None => "a signal".into(),
             };
-            let what = match self.model.blocks[i].diagnose() {
-                Some(why) => format!("output `{port}`: {why}"),
-                None => format!("output `{port}`"),
-            };
-            return Err(self.non_finite(self.t, i, what, value));
+            return Err(self.non_finite(self.t, owner.map(|(i, _)| i), what, self.signals[k]));
         }
         Ok(())
     }
 
-    /// The error for block `i` having produced `value` (not finite) as
-    /// `what`, with its inputs as they are now.
-    fn non_finite(&self, t: f64, i: usize, what: String, value: f64) -> SimError {
+    /// The error for block `owner` having produced `value` (not finite) as
+    /// `what`, with its inputs as they are now (block `?` when unknown).
+    fn non_finite(&self, t: f64, owner: Option<usize>, what: String, value: f64) -> SimError {
+        let Some(i) = owner else {
+            return SimError::NonFinite { t, block: "?".into(), what, value, inputs: vec![] };
+        };
         let meta = &self.model.meta[i];
         let mut inputs = Vec::new();
         for (name, p) in meta.input_names.iter().zip(meta.inputs.clone()) {
@@ -449,13 +446,9 @@ impl Simulator {
                 // A state that blew up inside the step: name its block, as a
                 // blow-up at a major step does.
                 Err(SolverError::NonFinite { t, state: Some(k) }) => {
-                    let what = |j: usize| format!("state {j} (inside the solver's step)");
-                    return Err(match self.state_owner(k) {
-                        Some((i, j)) => self.non_finite(t, i, what(j), f64::NAN),
-                        None => {
-                            SimError::NonFinite { t, block: "?".into(), what: what(k), value: f64::NAN, inputs: vec![] }
-                        }
-                    });
+                    let owner = self.state_owner(k);
+                    let what = format!("state {} (inside the solver's step)", owner.map_or(k, |(_, j)| j));
+                    return Err(self.non_finite(t, owner.map(|(i, _)| i), what, f64::NAN));
                 }
                 Err(error) => {
                     let culprit = error.state().and_then(|k| self.state_owner(k));
@@ -504,17 +497,9 @@ impl Simulator {
         if !all_finite(&self.x)
             && let Some(k) = self.x.iter().position(|v| !v.is_finite())
         {
-            let value = self.x[k];
-            return Err(match self.state_owner(k) {
-                Some((i, j)) => self.non_finite(self.t, i, format!("state {j}"), value),
-                None => SimError::NonFinite {
-                    t: self.t,
-                    block: "?".into(),
-                    what: format!("state {k}"),
-                    value,
-                    inputs: vec![],
-                },
-            });
+            let owner = self.state_owner(k);
+            let what = format!("state {}", owner.map_or(k, |(_, j)| j));
+            return Err(self.non_finite(self.t, owner.map(|(i, _)| i), what, self.x[k]));
         }
         self.stalled = if self.t > t0 { 0 } else { self.stalled + 1 };
         if self.stalled > 1000 {
