@@ -6,7 +6,7 @@ use crate::{U_ANY, U_SCALAR, Y_SAME, Y_SCALAR, param};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 use ctlgraph_solver::lti::LtiError;
-use ctlgraph_solver::{StateSpace, tf2ss, zpk2tf};
+use ctlgraph_solver::{StateSpace, factored_tf2ss, tf2ss, zpk2tf};
 use nalgebra::Complex;
 
 pub const TYPES: &[BlockType] = &[
@@ -31,9 +31,16 @@ pub const TYPES: &[BlockType] = &[
         category: "dynamics",
         summary: "Continuous transfer function num(s)/den(s).",
         doc: "Coefficients in descending powers of s (MATLAB's tf): num [1.639e4], den [1, 154.8, \
-              2.242e4] is 1.639e4/(s² + 154.8 s + 2.242e4). Must be proper (deg num <= deg den). \
-              Realised in controllable canonical form (MATLAB's tf2ss), zero initial state. Direct \
+              2.242e4] is 1.639e4/(s² + 154.8 s + 2.242e4), times `gain`. Must be proper (deg num <= deg \
+              den). Realised in controllable canonical form (MATLAB's tf2ss), zero initial state. Direct \
               feedthrough only when deg num = deg den.\n\
+              Factored form: `num` and `den` may each be a list of factors, a product written as printed — \
+              num [[1, 1200], [1, 225.4, 3.169e7]] is (s + 1200)(s² + 225.4 s + 3.169e7). It is realised \
+              as a cascade of sections, one per denominator factor in the order written, each numerator \
+              factor placed (highest degree first) in the first section with room, each section scaled to \
+              unit DC gain and `gain` applied at the output: a high-order product keeps the coefficients \
+              it was written with (the milling paper's sixth-order controller spreads over 1e14 this way, \
+              over 6e26 expanded). When a numerator factor fits no section the product is expanded.\n\
               Under a fixed-step method, when its input is piecewise constant (driven by discrete, constant \
               or step-like blocks) and nothing reads it inside a step, it is advanced by its exact \
               zero-order-hold transition exp([A B; 0 0]·Δ) instead of being integrated (`ctlgraph check` \
@@ -44,6 +51,7 @@ pub const TYPES: &[BlockType] = &[
         params: &[
             param("num", None, "numerator coefficients, descending powers of s"),
             param("den", None, "denominator coefficients, descending powers of s"),
+            param("gain", Some("1"), "a factor multiplying num/den"),
         ],
         build: build_tf,
     },
@@ -206,8 +214,15 @@ pub(crate) fn lti_error(p: &Params, e: LtiError) -> Diagnostic {
 }
 
 fn build_tf(p: &mut Params) -> Result<Built, Diagnostic> {
-    let (num, den) = (p.vector("num")?, p.vector("den")?);
-    let ss = tf2ss(&num, &den).map_err(|e| lti_error(p, e))?;
+    let (num, den) = (p.polynomial_factors("num")?, p.polynomial_factors("den")?);
+    let gain = p.number_where("gain", Some(1.0), f64::is_finite, "a finite number")?;
+    let ss = if num.len() == 1 && den.len() == 1 {
+        let scaled: Vec<f64> = num[0].iter().map(|c| c * gain).collect();
+        tf2ss(&scaled, &den[0])
+    } else {
+        factored_tf2ss(&num, &den, gain)
+    }
+    .map_err(|e| lti_error(p, e))?;
     let n = ss.n;
     Ok(Lti::new(ss, vec![0.0; n]).built())
 }

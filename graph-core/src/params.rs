@@ -242,6 +242,20 @@ impl<'a> Params<'a> {
         }
     }
 
+    /// A polynomial as a list of coefficients, or a product of polynomials
+    /// as a list of such lists (one factor each).
+    pub fn polynomial_factors(&mut self, key: &str) -> Result<Vec<Vec<f64>>, Diagnostic> {
+        let Some(v) = self.raw(key) else {
+            return Err(self.missing(key));
+        };
+        match &v.kind {
+            Kind::Seq(items) if items.iter().any(|i| matches!(i.kind, Kind::Seq(_))) => {
+                items.iter().map(|i| self.vector_value(key, i)).collect()
+            }
+            _ => Ok(vec![self.vector_value(key, v)?]),
+        }
+    }
+
     /// A list whose items are numbers or `[re, im]` pairs (a complex
     /// number, standing for itself and its conjugate).
     pub fn roots(&mut self, key: &str) -> Result<Vec<(f64, f64)>, Diagnostic> {

@@ -7,6 +7,7 @@
 // Index loops mirror the textbook formulas of the numerical methods.
 #![allow(clippy::needless_range_loop)]
 
+pub mod cascade;
 pub mod dense_lu;
 pub mod freq;
 pub mod lti;
@@ -14,6 +15,7 @@ pub mod ode;
 pub mod poly;
 pub mod zoh;
 
+pub use cascade::factored_tf2ss;
 pub use lti::{StateSpace, tf2ss, zpk2tf};
 pub use ode::{Integrator, Method, OdeSystem, SolverError, Stats};
 pub use zoh::Zoh;
