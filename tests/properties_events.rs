@@ -102,4 +102,30 @@ proptest! {
             prop_assert!((y[i] - expected).abs() < 1e-12, "k = {k}: {} vs {expected}", y[i]);
         }
     }
+
+    #[test]
+    fn milling_force_is_bounded_by_its_chips(x in testing::signal(0.02), y in testing::signal(0.02), teeth in 1usize..5,
+            rpm in 600.0..12000.0f64, entry in 0.0..180.0f64, sweep in 10.0..180.0f64, zero_crossing in any::<bool>()) {
+        // Chips never negative at a major step; |Fx|, |Fy| <= N·Kt·ap·(1 + Kr)·max h, and
+        // h <= ft + |x − x_τ| + |y − y_τ| with the delayed inputs the same signals shifted.
+        let (kt, kr, ap, ft) = (800.0, 0.3, 2.0, 0.05);
+        let params = format!(
+            "teeth: {teeth}, rpm: {rpm:e}, kt: {kt}, kr: {kr}, ap: {ap}, feed: {ft}, entry: {entry:e}, \
+             exit: {:e}, zero_crossing: {zero_crossing}, tooth_outputs: true", entry + sweep);
+        let shifted = |s: &Signal| Signal { bias: s.bias + 0.01, ..s.clone() };
+        let (xd, yd) = (shifted(&x), shifted(&y));
+        let trace = run("milling_force", &params, &[&x, &y, &xd, &yd], 0.2);
+        let h_max = ft + 2.0 * (x.bound() + y.bound()) + 0.02;
+        let f_max = teeth as f64 * kt * ap * (1.0 + kr) * h_max;
+        for i in 0..trace.t().len() {
+            for j in 1..=teeth {
+                let name = if teeth == 1 { "h".to_string() } else { format!("h[{j}]") };
+                let h = trace.column(&name).unwrap()[i];
+                prop_assert!((0.0..=h_max).contains(&h), "h[{j}] = {h}");
+            }
+            for f in ["fx", "fy"] {
+                prop_assert!(trace.column(f).unwrap()[i].abs() <= f_max);
+            }
+        }
+    }
 }

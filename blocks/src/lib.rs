@@ -6,6 +6,8 @@
 use ctlgraph_core::registry::{ParamDoc, PortDoc, Registry};
 
 pub mod adrc;
+#[cfg(test)]
+mod build_tests;
 pub mod continuous;
 pub mod delay;
 pub mod discrete;
@@ -15,6 +17,7 @@ pub mod force;
 pub mod fuzzy;
 pub mod integrator;
 pub mod math;
+pub mod milling;
 pub mod noise;
 pub mod nonlinear;
 pub mod pid;
@@ -43,6 +46,7 @@ pub fn registry() -> Registry {
         adrc::TYPES,
         fuzzy::TYPES,
         force::TYPES,
+        milling::TYPES,
         smc::TYPES,
         estimation::TYPES,
         routing::TYPES,
