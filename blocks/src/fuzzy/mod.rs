@@ -348,4 +348,6 @@ fn sentence(v: &Yaml, inputs: &[Variable], outputs: &[Variable]) -> Result<Rule,
 }
 
 #[cfg(test)]
+mod parse_tests;
+#[cfg(test)]
 mod tests;
