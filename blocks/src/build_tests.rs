@@ -4,28 +4,8 @@
 //! seen in the built block's ports and outputs. The positioned messages
 //! themselves are the integration tests' (`tests/errors.rs`).
 
-use crate::registry;
-use ctlgraph_core::block::Port;
+use crate::test_rig::{Rig, build};
 use ctlgraph_core::registry::Built;
-use ctlgraph_core::{Diagnostic, Io, Params, Width};
-
-/// Runs `f` on the parameters of a block `b: { type: ty, <params> }`
-/// (the inside of a YAML flow mapping).
-pub(crate) fn with_params<R>(ty: &str, params: &str, f: impl FnOnce(&mut Params) -> R) -> R {
-    let reg = registry();
-    let t = reg.get(ty).unwrap_or_else(|| panic!("no block type {ty}"));
-    let text = format!("blocks:\n  b: {{ type: {ty}, {params} }}\n");
-    let flat = ctlgraph_core::load_str(&text, "t.yaml".into(), &[]).unwrap_or_else(|d| panic!("{d}"));
-    let fb = &flat.blocks[0];
-    let mut p = Params::new("b", t.name, &fb.spec.pos, &fb.spec.params, &fb.scope, &fb.dir, t.params);
-    f(&mut p)
-}
-
-pub(crate) fn build(ty: &str, params: &str) -> Result<Built, Diagnostic> {
-    let reg = registry();
-    let t = reg.get(ty).unwrap_or_else(|| panic!("no block type {ty}"));
-    with_params(ty, params, |p| (t.build)(p))
-}
 
 #[track_caller]
 fn ok(ty: &str, params: &str) -> Built {
@@ -53,78 +33,6 @@ fn positive_only(ty: &str, base: &str, key: &str, zero_ok: bool) {
         ok(ty, &with("0"));
     } else {
         refused(ty, &with("0"), key);
-    }
-}
-
-/// A built block wired to its own signal buffer: inputs first, then
-/// outputs, every port at its fixed width (common width 1).
-pub(crate) struct Rig {
-    pub(crate) built: Built,
-    ins: Vec<Port>,
-    outs: Vec<Port>,
-    signals: Vec<f64>,
-    x: Vec<f64>,
-}
-
-impl Rig {
-    pub(crate) fn new(mut built: Built) -> Rig {
-        if built.iface.has_common_width() {
-            built.block.set_width(1).expect("width 1");
-        }
-        let width = |w: &Width| if let Width::Fixed(n) = w { *n } else { 1 };
-        let mut offset = 0;
-        let mut port = |n: usize| {
-            offset += n;
-            Port { offset: offset - n, width: n }
-        };
-        let ins: Vec<Port> = built.iface.inputs.iter().map(|p| port(width(&p.width))).collect();
-        let outs: Vec<Port> = built.iface.outputs.iter().map(|p| port(width(&p.width))).collect();
-        let mut x = vec![0.0; built.block.num_states()];
-        built.block.initialize(&mut x);
-        Rig { built, ins, outs, signals: vec![0.0; offset], x }
-    }
-
-    fn input_names(&self) -> Vec<&str> {
-        self.built.iface.inputs.iter().map(|p| p.name.as_str()).collect()
-    }
-
-    /// Sets every element of input port `i` to `values[i]`.
-    pub(crate) fn set(&mut self, values: &[f64]) {
-        for (p, &v) in self.ins.iter().zip(values) {
-            self.signals[p.offset..p.offset + p.width].fill(v);
-        }
-    }
-
-    /// All output elements at `t`, after `output`.
-    pub(crate) fn output(&mut self, t: f64) -> Vec<f64> {
-        let mut io = Io::new(t, false, &self.x, &mut self.signals, &self.ins, &self.outs);
-        self.built.block.output(&mut io);
-        let start = self.outs.first().map_or(0, |p| p.offset);
-        self.signals[start..].to_vec()
-    }
-
-    fn update(&mut self, t: f64) {
-        let mut io = Io::new(t, false, &self.x, &mut self.signals, &self.ins, &self.outs);
-        self.built.block.update(&mut io);
-    }
-
-    fn derivatives(&mut self) -> Vec<f64> {
-        let mut dx = vec![0.0; self.x.len()];
-        let io = Io::new(0.0, false, &self.x, &mut self.signals, &self.ins, &self.outs);
-        self.built.block.derivatives(&io, &mut dx);
-        dx
-    }
-
-    /// The outputs of `n` sample steps with the inputs held at `values`.
-    fn steps(&mut self, values: &[f64], n: usize) -> Vec<Vec<f64>> {
-        self.set(values);
-        (0..n)
-            .map(|k| {
-                let y = self.output(k as f64);
-                self.update(k as f64);
-                y
-            })
-            .collect()
     }
 }
 

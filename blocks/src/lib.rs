@@ -7,6 +7,8 @@ use ctlgraph_core::registry::{ParamDoc, PortDoc, Registry};
 
 pub mod adrc;
 #[cfg(test)]
+mod block_tests;
+#[cfg(test)]
 mod build_tests;
 pub mod continuous;
 pub mod delay;
@@ -25,6 +27,8 @@ pub mod routing;
 pub mod smc;
 pub mod sources;
 pub mod tables;
+#[cfg(test)]
+mod test_rig;
 #[cfg(feature = "testing")]
 pub mod testing;
 

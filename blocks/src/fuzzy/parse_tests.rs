@@ -3,7 +3,7 @@
 //! and each inference setting reaching the system that is built.
 
 use super::*;
-use crate::build_tests::{Rig, build, with_params};
+use crate::test_rig::{Rig, build, with_params};
 
 /// `variables()` on the `inputs` of a fuzzy block written with `inputs: <yaml>`.
 fn read_variables(yaml: &str, sugeno: bool) -> Result<Vec<Variable>, Diagnostic> {
