@@ -289,9 +289,6 @@ impl Block for Leso {
 
 fn build_leso(p: &mut Params) -> Result<Built, Diagnostic> {
     let order = p.count_or("order", 2, 3)?;
-    if order > 3 {
-        return Err(p.error("order", format!("orders 1 to 3 are supported, got {order}")));
-    }
     let beta = match (p.opt_number("omega")?, p.opt_vector("beta")?) {
         (Some(w), None) if w > 0.0 && w.is_finite() => bandwidth_gains(order, w),
         (Some(w), None) => return Err(p.error("omega", format!("must be a positive bandwidth, got {w}"))),

@@ -60,12 +60,13 @@ fn zero_order_hold_passes_its_input() {
 
 #[test]
 fn held_impedance_freezes_output_and_state() {
-    let params = "m: 1, b: 10, k: 100, sample_time: 0.01, hold_input: true";
-    let mut held = rig("impedance", params);
-    let mut free = rig("impedance", params);
+    // Not held, it is the plain discrete filter.
+    let mut held = rig("impedance", "m: 1, b: 10, k: 100, sample_time: 0.01, hold_input: true");
+    let mut plain = rig("impedance", "m: 1, b: 10, k: 100, sample_time: 0.01");
     let run =
         |r: &mut Rig, hold: f64, n: usize| -> Vec<f64> { r.steps(&[1.0, hold], n).iter().map(|v| v[0]).collect() };
-    let a = run(&mut free, 0.0, 6);
+    let a = run(&mut plain, 0.0, 6);
+    assert!(a[1..].iter().all(|&v| v > 0.0), "{a:?}");
     let first = run(&mut held, 0.0, 3);
     assert_eq!(first, a[..3]);
     // Held: the last output stays and the filter does not advance …
@@ -73,6 +74,11 @@ fn held_impedance_freezes_output_and_state() {
     assert_eq!(during, vec![first[2]; 3]);
     // … so releasing it continues where it stopped.
     assert_eq!(run(&mut held, 0.0, 3), a[3..]);
+    // Restarting clears the held value and the filter.
+    let mut x = vec![];
+    held.built.block.initialize(&mut x);
+    assert_eq!(run(&mut held, 1.0, 1), vec![0.0]);
+    assert_eq!(run(&mut held, 0.0, 3), a[..3]);
     // The discrete model has the hold input as a second input entering nowhere.
     let ss = held.built.block.discrete_lti().expect("a model");
     assert_eq!(ss.m, 2);
@@ -132,18 +138,23 @@ fn tabulated_contact_surface_slope() {
         let s = r.output(0.0)[3];
         assert!((s - slope).abs() < 1e-6, "slope at {x}: {s}");
     }
+    // The difference step grows with |x| (1e-9·|x|), so far out it still resolves the slope.
+    let mut far = rig("contact", "profile_x: [0, 2e6], profile_z: [0, 2e5], stiffness: 100");
+    far.set(&[1e6, 1e6, 0.0, 0.0]);
+    let s = far.output(0.0)[3];
+    assert!((s - 0.1).abs() < 1e-6, "{s}");
 }
 
 #[test]
 fn feed_drive_and_reference_filter_by_hand() {
-    // Je = 2, Be = 4, disturbance 1: x'' = (u − d − Be·v)/Je = (5 − 1 − 4)/2 = 0 at v = 1.
-    let mut fd = rig("feed_drive", "je: 2, be: 4, initial: [3, 1], disturbance_input: true");
-    assert_eq!(fd.x, vec![3.0, 1.0]);
+    // Je = 2, Be = 4 at v = 2: x'' = (u − d − Be·v)/Je = (5 − 1 − 8)/2 = −2 with d = 1, −1 with d = −1.
+    let mut fd = rig("feed_drive", "je: 2, be: 4, initial: [3, 2], disturbance_input: true");
+    assert_eq!(fd.x, vec![3.0, 2.0]);
     fd.set(&[5.0, 1.0]);
-    assert_eq!(fd.derivatives(), vec![1.0, 0.0]);
+    assert_eq!(fd.derivatives(), vec![2.0, -2.0]);
     fd.set(&[5.0, -1.0]);
-    assert_eq!(fd.derivatives(), vec![1.0, 1.0]);
-    assert_eq!(fd.output(0.0), vec![3.0, 1.0]);
+    assert_eq!(fd.derivatives(), vec![2.0, -1.0]);
+    assert_eq!(fd.output(0.0), vec![3.0, 2.0]);
     // p'' = ωn²(u − p) − 2ζωn·p' from p = 1 at rest, u = 2, ωn = 10, ζ = 0.7: 100.
     let mut rf = rig("reference_filter", "omega: 10, zeta: 0.7, initial: 1");
     assert_eq!(rf.x, vec![1.0, 0.0]);
@@ -167,7 +178,9 @@ fn limited_integrator_functions_directions_and_clamping() {
     assert!(r.built.block.needs_major_step() && !r.built.block.updates());
     // At the upper limit pushing up: held there (derivative 0, functions = u, upper watched
     // falling), the other element free; pushing down at the lower limit holds it there.
+    // At a major step the mode follows the state before major_step has run.
     r.x = vec![1.0, -0.2];
+    assert_eq!(r.derivatives(), vec![0.0, 1.0]);
     assert!(!r.major_step());
     assert_eq!(r.derivatives(), vec![0.0, 1.0]);
     assert_eq!(r.zero_crossings(), vec![1.0, 1.0, -1.2, 0.8]);
@@ -190,6 +203,10 @@ fn limited_integrator_functions_directions_and_clamping() {
     assert!(r.built.block.clamp_states(&mut x));
     assert_eq!(x, vec![1.0, 0.0]);
     assert!(!r.built.block.clamp_states(&mut x));
+    // A major step that only clamps reports the change.
+    r.x = vec![1.5, 0.0];
+    assert!(r.major_step());
+    assert_eq!(r.x, vec![1.0, 0.0]);
     // Unlimited and without ports it needs no major step.
     assert!(!wide("integrator", "", 2).built.block.needs_major_step());
     assert_eq!(wide("integrator", "", 3).x.len(), 3);
@@ -212,6 +229,17 @@ fn external_initial_values_per_element_and_resets() {
     r.built.block.crossing_located(0);
     assert!(r.major_step());
     assert_eq!(r.x, vec![3.0, 4.0]);
+    // A located limit crossing is not a reset.
+    let mut lim = wide("integrator", "lower: -1, upper: 1, reset: rising", 1);
+    lim.set(&[0.0, 0.0]);
+    lim.major_step();
+    lim.x = vec![0.5];
+    lim.built.block.crossing_located(0);
+    assert!(!lim.major_step());
+    assert_eq!(lim.x, vec![0.5]);
+    lim.built.block.crossing_located(2);
+    assert!(lim.major_step());
+    assert_eq!(lim.x, vec![0.0]);
     // A scalar initial value broadcasts.
     let mut s = wide("integrator", "initial_source: external", 2);
     s.ins[1].width = 1;

@@ -114,6 +114,21 @@ fn transfer_function_errors_name_the_polynomial_at_fault() {
 }
 
 #[test]
+fn transfer_function_gain_and_factors() {
+    let dc = |params: &str| {
+        let b = ok("transfer_function", params);
+        let ss = b.block.lti().expect("an LTI block");
+        (ss.n, ctlgraph_solver::freq::at_frequency(ss, 0.0, None).re)
+    };
+    let close = |(n, g): (usize, f64), (n0, g0): (usize, f64)| n == n0 && (g - g0).abs() < 1e-12 * g0.abs();
+    // 2/(s + 1) times 3; one factor over two; two factors over one polynomial.
+    assert!(close(dc("num: [2], den: [1, 1], gain: 3"), (1, 6.0)));
+    assert!(close(dc("num: [1], den: [[1, 3], [1, 4]]"), (2, 1.0 / 12.0)));
+    assert!(close(dc("num: [[1, 1], [1, 2]], den: [1, 3, 5], gain: 2"), (2, 0.8)));
+    assert!(close(dc("num: [[1, 1]], den: [[1, 3]], gain: -1"), (1, -1.0 / 3.0)));
+}
+
+#[test]
 fn initial_vectors_broadcast_or_match_the_states() {
     let ss = "A: [[-1, 0], [0, -2]], B: [[1], [1]], C: [[1, 1]]";
     assert_eq!(Rig::new(ok("state_space", &format!("{ss}, initial: [3, -4]"))).x, vec![3.0, -4.0]);
@@ -138,10 +153,23 @@ fn choices_select_their_mode() {
     // The normal-force selector port follows `select`.
     assert_eq!(Rig::new(ok("normal_force", "mu_u: 0.1")).input_names(), ["fx", "fz", "climbing"]);
     assert_eq!(Rig::new(ok("normal_force", "mu_u: 0.1, select: slope")).input_names(), ["fx", "fz", "slope"]);
-    // Impedance discretisation: bilinear (the default) and backward Euler differ.
-    let lti = |m: &str| ok("impedance", &format!("m: 1, b: 10, k: 100, sample_time: 0.01{m}")).block.discrete_lti();
-    assert_eq!(lti(""), lti(", method: bilinear"));
-    assert_ne!(lti(""), lti(", method: backward_euler"));
+    // Impedance discretisation: the step response is the difference equation of
+    // discrete_impedance with the method asked for, bilinear by default.
+    for (method, bilinear) in [("", true), (", method: bilinear", true), (", method: backward_euler", false)] {
+        let mut r = Rig::new(ok("impedance", &format!("m: 1, b: 10, k: 100, sample_time: 0.01{method}")));
+        let got: Vec<f64> = r.steps(&[1.0], 5).iter().map(|y| y[0]).collect();
+        let (num, den) = crate::force::discrete_impedance(1.0, 10.0, 100.0, 0.01, bilinear);
+        let mut y = [0.0; 7];
+        for n in 2..7 {
+            // A unit step from sample 0 (index 2): den·y = num·u in powers of z^-1.
+            let u = |k: usize| if k >= 2 { 1.0 } else { 0.0 };
+            y[n] = (num[0] * u(n) + num[1] * u(n - 1) + num[2] * u(n - 2) - den[1] * y[n - 1] - den[2] * y[n - 2])
+                / den[0];
+        }
+        for (a, b) in got.iter().zip(&y[2..]) {
+            assert!((a - b).abs() < 1e-15, "{method}: {got:?} vs {:?}", &y[2..]);
+        }
+    }
 }
 
 #[test]
@@ -182,6 +210,7 @@ fn a_td_paper_form_steps_by_h_and_the_others_by_h0() {
 fn leso_and_lsef_gains_are_checked() {
     positive_only("leso", "b0: 1", "omega", false);
     ok("leso", "order: 1, beta: [1, 2], b0: 1");
+    ok("leso", "order: 3, omega: 10, b0: 1");
     refused("leso", "order: 1, beta: [1, 2, 3], b0: 1", "beta");
     refused("leso", "omega: 10, beta: [1, 2, 3], b0: 1", "beta");
     for bad in ["0", ".inf"] {
@@ -194,7 +223,24 @@ fn leso_and_lsef_gains_are_checked() {
     refused("lsef", "order: 1, alpha: [1, 2], b0: 1", "alpha");
     refused("lsef", "order: 3, alpha: [1, 2, 3], b0: 1", "order");
     // The bandwidth gains for order 2: β = (3ω, 3ω², ω³).
+    // The ports: an observer of order n outputs n + 1 estimates; the LSEF takes r2 at order 2 only.
     let mut rig = Rig::new(ok("leso", "order: 2, omega: 10, b0: 1, sample_time: 0.001"));
+    assert_eq!(rig.outs[0].width, 3);
+    let lsef = |params: &str| {
+        let r = Rig::new(ok("lsef", params));
+        (
+            r.input_names().iter().map(|s| s.to_string()).collect::<Vec<_>>(),
+            r.ins.iter().map(|p| p.width).collect::<Vec<_>>(),
+        )
+    };
+    assert_eq!(
+        lsef("order: 1, alpha: [3], b0: 1, gain_inputs: [alpha1]"),
+        (vec!["r1".into(), "z".into(), "alpha1".into()], vec![1, 2, 1])
+    );
+    assert_eq!(
+        lsef("alpha: [1, 2], b0: 1, gain_inputs: [alpha1, alpha2]"),
+        (vec!["r1".into(), "r2".into(), "z".into(), "alpha1".into(), "alpha2".into()], vec![1, 1, 3, 1, 1])
+    );
     assert_eq!(rig.built.block.discrete_lti().map(|s| s.n), Some(3));
     rig.set(&[1.0, 0.0]);
     rig.update(0.0);

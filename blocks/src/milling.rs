@@ -20,8 +20,11 @@ pub const TYPES: &[BlockType] = &[BlockType {
           while φst <= φj mod 2π < φex (δ(φj) = 1). Chip thickness (paper eq. 1–4):\n\
           \x20 h_j = max(0, ft·sin φj + (x − x_τ)·sin φj + (y − y_τ)·cos φj)·δ(φj),\n\
           x_τ, y_τ the tool's displacement one tooth period τ = 60/(N·rpm) earlier (wire them from \
-          `transport_delay` blocks with that delay); the clip at 0 is the tooth leaving the material, the \
-          nonlinearity that bounds chatter. Forces (eq. 5–6): Ft,j = Kt·ap·h_j, Fr,j = Kr·Ft,j,\n\
+          `transport_delay` blocks with that delay); the clip at 0 is the tooth leaving the material. \
+          As in the paper the surface is the one the previous tooth left (single regeneration): a \
+          tooth that jumped out does not remember the older surface it then meets, so an unstable \
+          cut's vibration keeps growing rather than settling on a chatter amplitude. \
+          Forces (eq. 5–6): Ft,j = Kt·ap·h_j, Fr,j = Kr·Ft,j,\n\
           \x20 Fx = Σ_j (−Ft,j·cos φj − Fr,j·sin φj),   Fy = Σ_j (Ft,j·sin φj − Fr,j·cos φj),\n\
           the force on the tool. Units: Kt [N/mm²], ap, ft, x, y [mm] give N. Immersion: `milling: up` \
           (φst = 0, φex = arccos(1 − 2·ae/D)) or `down` (φst = arccos(2·ae/D − 1), φex = π) with \

@@ -151,7 +151,7 @@ fn build_sliding_mode(p: &mut Params) -> Result<Built, Diagnostic> {
     let (lambda, ks, rho) = (p.positive("lambda")?, p.positive("ks")?, p.positive("rho")?);
     let (je, be) = (p.positive("je")?, p.positive("be")?);
     let (d_min, d_max) = (p.number("d_min")?, p.number("d_max")?);
-    if d_min.is_nan() || d_max.is_nan() || d_min > d_max {
+    if d_min > d_max {
         return Err(p.error("d_max", format!("`d_max` ({d_max}) must be >= `d_min` ({d_min})")));
     }
     let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;

@@ -136,8 +136,8 @@ fn variables(p: &Params, v: &Yaml, what: &str, sugeno_consts: bool) -> Result<Ve
         let (lo, hi) = match &range.kind {
             Kind::Seq(r) if r.len() == 2 => (num(p, &r[0], "range")?, num(p, &r[1], "range")?),
             _ => return Err(Diagnostic::at(&range.pos, "`range` is [lo, hi]")),
-        };
-        if lo.is_nan() || hi.is_nan() || lo >= hi {
+        }; // (NaN was refused as it was read)
+        if lo >= hi {
             return Err(Diagnostic::at(&range.pos, format!("`range`: lo ({lo}) must be below hi ({hi})")));
         }
         let terms_v = lookup(fields, "terms")

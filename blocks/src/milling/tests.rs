@@ -190,3 +190,83 @@ fn mean_force_over_a_tooth_period_is_altintas() {
         );
     }
 }
+
+/// Whether tooth `j` cuts at `t`, from its angle (away from the cut's edges).
+fn cuts(c: &Cutter, j: usize, t: f64) -> bool {
+    (c.angle(j, t) - c.entry).rem_euclid(TAU) < c.exit - c.entry
+}
+
+#[test]
+fn far_into_the_run_every_event_is_an_edge_and_each_side_is_right() {
+    // Ten seconds in (about 1000 revolutions), 300 events of a 3-tooth cutter with an odd
+    // phase: at each event time the major step sees the state just after it, the solver's
+    // left limit the state just before, tooth by tooth.
+    let b = block(cutter(3, 20.0, 110.0, 17.0), true);
+    let c = &b.cutter;
+    let tiny = 1e-6 * c.tooth_period();
+    let mut t = 10.0;
+    for _ in 0..300 {
+        let e = b.next_event(t);
+        assert!(e > t && e - t <= c.tooth_period(), "{t} -> {e}");
+        let mut changed = false;
+        for j in 0..3 {
+            let (before, after) = (cuts(c, j, e - tiny), cuts(c, j, e + tiny));
+            changed |= before != after;
+            let mut signals = [0.0; 6];
+            let left = Io::new(e, true, &[], &mut signals, &IN, &OUT[..2]);
+            assert_eq!(c.cutting(j, &left), before, "tooth {j} before {e}");
+            let major = Io::new(e, false, &[], &mut signals, &IN, &OUT[..2]);
+            assert_eq!(c.cutting(j, &major), after, "tooth {j} at {e}");
+        }
+        assert!(changed, "nothing happens at {e}");
+        t = e;
+    }
+    // Cut 90° of a 120° pitch: exits 90° after entries, 30° before the next entry.
+    assert!((b.min_event_spacing() - 30f64.to_radians() / c.omega).abs() < 1e-15);
+}
+
+#[test]
+fn a_chip_of_exactly_zero_starts_clear() {
+    // Up-milling, tooth 0 entering at t = 0: h = ft·sin 0 + (y − y_τ)·cos 0 = 0 at the major step,
+    // so the tooth is not cutting until a major step sees a positive chip.
+    let mut b = block(cutter(3, 0.0, 90.0, 0.0), true);
+    let (_, _, h) = eval(&mut b, 0.0, [0.0; 4], false);
+    assert_eq!(h[0], 0.0);
+    let (_, _, h) = eval(&mut b, 0.0, [0.0, 0.01, 0.0, 0.0], true);
+    assert_eq!(h[0], 0.0);
+    assert!(!b.updates());
+    assert!(b.not_linearizable().is_some_and(|why| why.contains("periodic")));
+}
+
+#[test]
+fn immersion_from_milling_mode_or_angles() {
+    let angles = |params: &str| crate::test_rig::with_params("milling_force", params, immersion_angles);
+    let deg = |r: Result<(f64, f64), Diagnostic>| r.map(|(a, b)| (a.to_degrees(), b.to_degrees())).unwrap();
+    for (params, (entry, exit)) in [
+        ("immersion: 0.5", (0.0, 90.0)),
+        ("milling: down, immersion: 0.5", (90.0, 180.0)),
+        ("immersion: 0.25", (0.0, 60.0)),
+        ("milling: down, immersion: 0.25", (120.0, 180.0)),
+        ("", (0.0, 180.0)),
+        ("entry: 30, exit: 100", (30.0, 100.0)),
+    ] {
+        let (a, b) = deg(angles(params));
+        assert!((a - entry).abs() < 1e-9 && (b - exit).abs() < 1e-9, "{params}: {a} {b}");
+    }
+    let only_exit = angles("exit: 90").unwrap_err();
+    assert!(only_exit.to_string().contains("`entry`"), "{only_exit}");
+}
+
+#[test]
+fn built_from_yaml_speed_and_radial_coefficient() {
+    use crate::test_rig::{Rig, build};
+    // One tooth at 600 rpm (10 rev/s) cutting 0°–90°, at 60° at t = 0: it leaves 30° later, at 1/120 s.
+    let base = "teeth: 1, rpm: 600, kt: 700, ap: 2, feed: 0.05, entry: 0, exit: 90, phase: 60";
+    let mut by_ratio = Rig::new(build("milling_force", &format!("{base}, kr: 0.3")).unwrap());
+    let mut by_coefficient = Rig::new(build("milling_force", &format!("{base}, krc: 210")).unwrap());
+    assert!((by_ratio.built.block.next_event(0.0) - (30.0 / 360.0) / 10.0).abs() < 1e-15);
+    // Kr = krc/kt = 0.3: the force of `one_tooth_at_sixty_degrees_by_hand`.
+    let (a, b) = (by_ratio.output(0.0), by_coefficient.output(0.0));
+    assert!((a[0] + 46.06088913245536).abs() < 1e-11 && (a[1] - 43.40673326026339).abs() < 1e-11, "{a:?}");
+    assert!((a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12, "{a:?} {b:?}");
+}
