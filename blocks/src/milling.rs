@@ -108,16 +108,29 @@ impl Cutter {
         self.entry_time(j, k) + (self.exit - self.entry) / self.omega
     }
 
-    /// The revolution of tooth `j`'s latest entry at `t`, to within one.
+    /// The revolution of tooth `j`'s latest entry at `t`. Within rounding
+    /// of an entry instant it may be one off either way; away from them it
+    /// is exact. A cut shorter than a turn then needs only this revolution
+    /// and the next: one below, the tooth had long left the cut before the
+    /// entry; one above, the entry is the next event.
     fn revolution(&self, j: usize, t: f64) -> f64 {
         ((self.angle(j, t) - self.entry) / TAU).floor()
+    }
+
+    /// A cut all the way round: every exit is the next entry, so there are
+    /// no edges (and no instants an ulp apart to step between).
+    fn full_turn(&self) -> bool {
+        self.exit - self.entry >= TAU
     }
 
     /// Whether tooth `j` is in the cut at `io.t` (the side of an entry or
     /// exit instant as [`Io::reached`] says).
     fn cutting(&self, j: usize, io: &Io) -> bool {
+        if self.full_turn() {
+            return true;
+        }
         let k = self.revolution(j, io.t);
-        [k + 1.0, k, k - 1.0]
+        [k + 1.0, k]
             .into_iter()
             .find(|&c| io.reached(self.entry_time(j, c)))
             .is_some_and(|c| !io.reached(self.exit_time(j, c)))
@@ -198,12 +211,15 @@ impl Block for MillingForce {
 
     fn next_event(&self, t: f64) -> f64 {
         let mut next = f64::INFINITY;
+        if self.cutter.full_turn() {
+            return next;
+        }
         for j in 0..self.cutter.teeth {
             let k = self.cutter.revolution(j, t);
-            for c in [k - 1.0, k, k + 1.0, k + 2.0] {
+            for c in [k, k + 1.0] {
                 for e in [self.cutter.entry_time(j, c), self.cutter.exit_time(j, c)] {
-                    if e > t && e < next {
-                        next = e;
+                    if e > t {
+                        next = next.min(e);
                     }
                 }
             }
@@ -214,6 +230,9 @@ impl Block for MillingForce {
     fn min_event_spacing(&self) -> f64 {
         // Entries are τ apart, exits too; an exit falls (φex − φst)/Ω
         // after an entry, modulo τ.
+        if self.cutter.full_turn() {
+            return f64::INFINITY;
+        }
         let tau = self.cutter.tooth_period();
         let offset = ((self.cutter.exit - self.cutter.entry) / self.cutter.omega).rem_euclid(tau);
         if offset == 0.0 { tau } else { offset.min(tau - offset) }

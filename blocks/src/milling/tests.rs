@@ -270,3 +270,23 @@ fn built_from_yaml_speed_and_radial_coefficient() {
     assert!((a[0] + 46.06088913245536).abs() < 1e-11 && (a[1] - 43.40673326026339).abs() < 1e-11, "{a:?}");
     assert!((a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12, "{a:?} {b:?}");
 }
+
+#[test]
+fn a_full_turn_of_cut_never_lets_go() {
+    // entry 0°, exit 360°: each exit would be the next entry, computed by another formula and
+    // possibly an ulp apart. Such a cut has no edges at all: always cutting, no events.
+    let b = block(cutter(1, 0.0, 360.0, 0.0), false);
+    assert_eq!((b.next_event(1.0), b.min_event_spacing()), (f64::INFINITY, f64::INFINITY));
+    let c = &b.cutter;
+    for k in 0..50 {
+        let t = c.entry_time(0, 100.0 + k as f64);
+        for left in [true, false] {
+            let mut signals = [0.0; 6];
+            let io = Io::new(t, left, &[], &mut signals, &IN, &OUT[..2]);
+            assert!(c.cutting(0, &io), "t = {t}, left limit {left}");
+        }
+    }
+    // A cut one degree short of a turn still has its edges.
+    let short = block(cutter(1, 0.0, 359.0, 0.0), false);
+    assert!(short.next_event(1.0) < 1.0 + short.cutter.tooth_period());
+}

@@ -108,3 +108,44 @@ fn improper_and_degenerate_products_are_reported() {
     let k = factored_tf2ss(&[], &[], 4.0).unwrap();
     assert_eq!((k.n, k.d[0]), (0, 4.0));
 }
+
+#[test]
+fn series_of_two_output_systems_by_hand() {
+    // G1: x1' = −x1 + u, y1 = [x1; 2x1 + u];  G2: x2' = −3x2 + [1 2]·y1, y2 = [x2 + y1a; 4x2 + y1b].
+    let g1 = StateSpace::new(vec![vec![-1.0]], vec![vec![1.0]], vec![vec![1.0], vec![2.0]], vec![vec![0.0], vec![1.0]])
+        .unwrap();
+    let g2 = StateSpace::new(
+        vec![vec![-3.0]],
+        vec![vec![1.0, 2.0]],
+        vec![vec![1.0], vec![4.0]],
+        vec![vec![1.0, 0.0], vec![0.0, 1.0]],
+    )
+    .unwrap();
+    let g = g1.series(&g2).unwrap();
+    assert_eq!((g.n, g.m, g.p), (2, 1, 2));
+    // A = [A1 0; B2·C1 A2] = [−1 0; 1·1 + 2·2 −3], B = [B1; B2·D1] = [1; 2],
+    // C = [D2·C1 C2] = [1 1; 2 4], D = D2·D1 = [0; 1].
+    assert_eq!(g.a, vec![-1.0, 0.0, 5.0, -3.0]);
+    assert_eq!(g.b, vec![1.0, 2.0]);
+    assert_eq!(g.c, vec![1.0, 1.0, 2.0, 4.0]);
+    assert_eq!(g.d, vec![0.0, 1.0]);
+}
+
+#[test]
+fn zeros_fill_sections_by_their_room_and_the_order_limit_holds() {
+    // Three first-order zeros over a quadratic and a first-order pole: two go to the quadratic.
+    let (num, den) = (vec![vec![1.0, 1.0], vec![1.0, 2.0], vec![1.0, 3.0]], vec![vec![1.0, 1.0, 1.0], vec![1.0, 5.0]]);
+    let g = factored_tf2ss(&num, &den, 2.0).unwrap();
+    for w in [0.0, 0.7, 3.0] {
+        let s = c64::new(0.0, w);
+        let (a, b) = (evaluate(&g, s), product_at(&num, &den, 2.0, s));
+        assert!((a - b).norm() < 1e-12 * b.norm(), "{w}: {a} vs {b}");
+    }
+    // A constant over nothing is that constant.
+    let k = factored_tf2ss(&[vec![2.0]], &[], 1.5).unwrap();
+    assert_eq!((k.n, k.d[0]), (0, 3.0));
+    // Order 100 is allowed, 101 is not.
+    let poles = |n: usize| vec![vec![1.0, 1.0]; n];
+    assert_eq!(factored_tf2ss(&[], &poles(100), 1.0).map(|g| g.n), Ok(100));
+    assert_eq!(factored_tf2ss(&[], &poles(101), 1.0).map(|g| g.n), Err(LtiError::TooHigh { degree: 101 }));
+}

@@ -217,7 +217,7 @@ struct Tolerance {
 /// step ends. `worst` is the component to blame if the step is too small.
 fn trial_step(t: f64, t_limit: f64, h: &mut f64, worst: Option<usize>) -> Result<(bool, f64), SolverError> {
     let span = t_limit - t;
-    let landing = *h >= span * (1.0 - 1e-9) || span - *h < 0.01 * *h;
+    let landing = span - *h < 0.01 * *h; // within 1 % of the limit, or past it
     if landing {
         *h = span;
     }

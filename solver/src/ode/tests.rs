@@ -130,6 +130,25 @@ fn method_step_limits_and_names() {
     assert_eq!(dopri.with_max_step(0.125).max_step(), 0.125);
     assert_eq!(Method::Heun { step: 0.1 }.with_max_step(0.125).max_step(), 0.1);
     assert!(dopri.is_adaptive() && trbdf2.is_adaptive() && !Method::Rk4 { step: 1e-3 }.is_adaptive());
+    let names = [Method::Euler { step: 0.1 }, Method::Heun { step: 0.1 }, Method::Rk4 { step: 0.1 }, dopri, trbdf2]
+        .map(|m| m.name());
+    assert_eq!(names, ["euler", "heun", "rk4", "dopri5", "trbdf2"]);
+}
+
+#[test]
+fn solver_errors_say_what_and_where() {
+    let small = SolverError::StepTooSmall { t: 0.5, step: 1e-17, state: Some(2) };
+    assert_eq!(
+        small.to_string(),
+        "step size 1e-17 too small at t = 0.5: the system is too stiff or discontinuous for the tolerances"
+    );
+    assert_eq!(small.state(), Some(2));
+    let blown = SolverError::NonFinite { t: 1.25, state: Some(3) };
+    assert_eq!((blown.to_string(), blown.state()), ("state 3 is not finite at t = 1.25".to_string(), Some(3)));
+    let unknown = SolverError::NonFinite { t: 1.25, state: None };
+    assert_eq!((unknown.to_string(), unknown.state()), ("state is not finite at t = 1.25".to_string(), None));
+    let singular = SolverError::Singular { t: 2.0 };
+    assert_eq!((singular.to_string(), singular.state()), ("the Newton matrix is singular at t = 2".to_string(), None));
 }
 
 /// x' = p·t^(p−1), x(0) = 0: x(1) = 1, the rate depending on t only.
