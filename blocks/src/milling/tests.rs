@@ -199,30 +199,34 @@ fn cuts(c: &Cutter, j: usize, t: f64) -> bool {
 #[test]
 fn far_into_the_run_every_event_is_an_edge_and_each_side_is_right() {
     // Ten seconds in (about 1000 revolutions), 300 events of a 3-tooth cutter with an odd
-    // phase: at each event time the major step sees the state just after it, the solver's
-    // left limit the state just before, tooth by tooth.
-    let b = block(cutter(3, 20.0, 110.0, 17.0), true);
-    let c = &b.cutter;
-    let tiny = 1e-6 * c.tooth_period();
-    let mut t = 10.0;
-    for _ in 0..300 {
-        let e = b.next_event(t);
-        assert!(e > t && e - t <= c.tooth_period(), "{t} -> {e}");
-        let mut changed = false;
-        for j in 0..3 {
-            let (before, after) = (cuts(c, j, e - tiny), cuts(c, j, e + tiny));
-            changed |= before != after;
-            let mut signals = [0.0; 6];
-            let left = Io::new(e, true, &[], &mut signals, &IN, &OUT[..2]);
-            assert_eq!(c.cutting(j, &left), before, "tooth {j} before {e}");
-            let major = Io::new(e, false, &[], &mut signals, &IN, &OUT[..2]);
-            assert_eq!(c.cutting(j, &major), after, "tooth {j} at {e}");
+    // phase, up-milling-like (20°–110°) and down-milling (150°–180°, 200°–300°): at each event
+    // time the major step sees the state just after it, the solver's left limit the state
+    // just before, tooth by tooth.
+    for (entry, exit) in [(20.0, 110.0), (150.0, 180.0), (200.0, 300.0)] {
+        let b = block(cutter(3, entry, exit, 17.0), true);
+        let c = &b.cutter;
+        let tiny = 1e-6 * c.tooth_period();
+        let mut t = 10.0;
+        for _ in 0..300 {
+            let e = b.next_event(t);
+            assert!(e > t && e - t <= c.tooth_period(), "{t} -> {e}");
+            let mut changed = false;
+            for j in 0..3 {
+                let (before, after) = (cuts(c, j, e - tiny), cuts(c, j, e + tiny));
+                changed |= before != after;
+                let mut signals = [0.0; 6];
+                let left = Io::new(e, true, &[], &mut signals, &IN, &OUT[..2]);
+                assert_eq!(c.cutting(j, &left), before, "{entry}–{exit}: tooth {j} before {e}");
+                let major = Io::new(e, false, &[], &mut signals, &IN, &OUT[..2]);
+                assert_eq!(c.cutting(j, &major), after, "{entry}–{exit}: tooth {j} at {e}");
+            }
+            assert!(changed, "{entry}–{exit}: nothing happens at {e}");
+            t = e;
         }
-        assert!(changed, "nothing happens at {e}");
-        t = e;
     }
     // Cut 90° of a 120° pitch: exits 90° after entries, 30° before the next entry.
-    assert!((b.min_event_spacing() - 30f64.to_radians() / c.omega).abs() < 1e-15);
+    let b = block(cutter(3, 20.0, 110.0, 17.0), true);
+    assert!((b.min_event_spacing() - 30f64.to_radians() / b.cutter.omega).abs() < 1e-15);
 }
 
 #[test]
