@@ -193,3 +193,135 @@ fn a_step_lands_on_the_limit_rather_than_leave_a_sliver() {
     let mut tiny = 1e-300;
     assert!(matches!(trial_step(1.0, 2.0, &mut tiny, Some(3)), Err(SolverError::StepTooSmall { state: Some(3), .. })));
 }
+
+/// x1' = −x1 + t, x2' = −3·x2: linear, and depending on t.
+struct Mixed;
+impl OdeSystem for Mixed {
+    fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        dx[0] = -x[0] + t;
+        dx[1] = -3.0 * x[1];
+    }
+}
+
+/// x' = t·x.
+struct Growth;
+impl OdeSystem for Growth {
+    fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        dx[0] = t * x[0];
+    }
+}
+
+fn dopri(rtol: f64, atol: f64, max_step: f64, initial_step: Option<f64>) -> Method {
+    Method::DormandPrince { rtol, atol, max_step, initial_step }
+}
+
+#[test]
+fn starting_step_and_one_dopri5_step_match_scipy() {
+    // SciPy 1.17.1: select_initial_step(f, 1, [1, 2], inf, inf, f(1, [1, 2]), 1, 4, 1e-3, 1e-6).
+    let mut integ = Integrator::new(dopri(1e-3, 1e-6, f64::INFINITY, None), 2);
+    let x = [1.0, 2.0];
+    Mixed.derivatives(1.0, &x, &mut integ.k[0]);
+    let h = integ.initial_step(&mut Mixed, 1.0, &x, 1e-3, 1e-6, f64::INFINITY);
+    assert!((h - 0.06898673034921078).abs() < 1e-15, "{h}");
+    // SciPy's RK45 (the same tableau, fifth order propagated): one step of 0.1 of x' = t·x from x(1) = 1.
+    let mut integ = Integrator::new(dopri(1e-3, 1e-6, 0.1, Some(0.1)), 1);
+    let mut x = [1.0];
+    assert_eq!(integ.advance(&mut Growth, 1.0, 1.1, &mut x), Ok(1.1));
+    assert!((x[0] - 1.11071061065378).abs() < 1e-14, "{}", x[0]);
+    assert_eq!((integ.stats().steps, integ.stats().rejected), (1, 0));
+}
+
+#[test]
+fn hermite_dense_output_and_its_extra_evaluation() {
+    // One RK4 step of x' = t from x(1) = 0 to t = 2 (exact: x = (t² − 1)/2). The cubic
+    // Hermite interpolant through x0 = 0, x1 = 1.5, f0 = 1, f1 = 2 is exact for it:
+    // at t = 1.5, 0.125·1 + 0.5·1.5 − 0.125·2 = 0.625.
+    struct Ramp;
+    impl OdeSystem for Ramp {
+        fn derivatives(&mut self, t: f64, _x: &[f64], dx: &mut [f64]) {
+            dx[0] = t;
+        }
+    }
+    let mut integ = Integrator::new(Method::Rk4 { step: 1.0 }, 1);
+    let mut x = [0.0];
+    integ.advance(&mut Ramp, 1.0, 2.0, &mut x).unwrap();
+    assert_eq!(x[0], 1.5);
+    let before = integ.stats().evaluations;
+    let mut out = [0.0];
+    integ.interpolate(&mut Ramp, 1.5, &x, &mut out);
+    assert!((out[0] - 0.625).abs() < 1e-15, "{}", out[0]);
+    assert_eq!(integ.stats().evaluations, before + 1);
+    integ.interpolate(&mut Ramp, 1.25, &x, &mut out);
+    assert!((out[0] - (1.25f64 * 1.25 - 1.0) / 2.0).abs() < 1e-15, "{}", out[0]);
+    assert_eq!(integ.stats().evaluations, before + 1);
+    assert_eq!(integ.stats().steps, 1);
+}
+
+#[test]
+fn restart_and_invalidation() {
+    let mut integ = Integrator::new(dopri(1e-6, 1e-9, 0.1, None), 2);
+    let mut x = [1.0, 2.0];
+    let mut t = 0.0;
+    for _ in 0..3 {
+        t = integ.advance(&mut Mixed, t, 1.0, &mut x).unwrap();
+    }
+    assert_eq!(integ.stats().steps, 3);
+    // First-same-as-last: a step after an accepted one reuses its last derivative (6 new
+    // evaluations); after invalidate() the start is evaluated again (7).
+    let e = integ.stats().evaluations;
+    t = integ.advance(&mut Mixed, t, 1.0, &mut x).unwrap();
+    let plain = integ.stats().evaluations - e;
+    integ.invalidate();
+    let e = integ.stats().evaluations;
+    integ.advance(&mut Mixed, t, 1.0, &mut x).unwrap();
+    assert_eq!((plain, integ.stats().evaluations - e), (6, 7));
+    integ.reset();
+    assert_eq!(integ.stats(), Stats::default());
+    // After reset the starting step is chosen again: the same first step as a new integrator.
+    let (mut a, mut b) = ([1.0, 2.0], [1.0, 2.0]);
+    let ta = integ.advance(&mut Mixed, 0.0, 1.0, &mut a).unwrap();
+    let tb = Integrator::new(dopri(1e-6, 1e-9, 0.1, None), 2).advance(&mut Mixed, 0.0, 1.0, &mut b).unwrap();
+    assert_eq!((ta, a), (tb, b));
+}
+
+#[test]
+fn error_norm_and_the_component_to_blame() {
+    // Errors (1e-3, 5e-3, 2e-3) on a scale of atol + rtol·max(|a|, |b|) = 1e-3 + 0 each:
+    // scaled (1, 5, 2): RMS √(30/3) = √10, worst component 1.
+    let zero = [0.0; 3];
+    let (rms, worst) = scaled_rms([1e-3, 5e-3, 2e-3].into_iter(), &zero, &zero, 1.0, 1e-3);
+    assert!((rms - 10f64.sqrt()).abs() < 1e-12 && worst == 1, "{rms} {worst}");
+    // The scale takes the larger of the two states.
+    let (rms, _) = scaled_rms([2e-3].into_iter(), &[1.0], &[-3.0], 1e-3, 1e-3);
+    assert!((rms - 0.5).abs() < 1e-12, "{rms}");
+}
+
+#[test]
+fn blow_up_names_the_component_and_tiny_steps_are_refused() {
+    // x1 stays put, x2' = x2²: x2 = 1/(1 − t) blows up at t = 1.
+    struct Blow;
+    impl OdeSystem for Blow {
+        fn derivatives(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) {
+            dx[0] = 0.0;
+            dx[1] = x[1] * x[1];
+        }
+    }
+    let mut integ = Integrator::new(dopri(1e-3, 1e-6, 0.5, None), 2);
+    let mut x = [1.0, 1.0];
+    let mut t = 0.0;
+    let err = loop {
+        match integ.advance(&mut Blow, t, 2.0, &mut x) {
+            Ok(t_new) if t_new < 2.0 => t = t_new,
+            Ok(_) => panic!("passed the blow-up"),
+            Err(e) => break e,
+        }
+    };
+    assert_eq!(err.state(), Some(1), "{err}");
+    // A step that no longer moves t (1 + 6e-17 == 1, while 1 − 6e-17 != 1) is refused,
+    // blaming the component given.
+    let mut h = 6e-17;
+    assert_eq!(
+        trial_step(1.0, 2.0, &mut h, Some(3)),
+        Err(SolverError::StepTooSmall { t: 1.0, step: 6e-17, state: Some(3) })
+    );
+}

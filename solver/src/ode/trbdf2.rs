@@ -278,3 +278,18 @@ fn factor(stats: &mut Stats, lin: &mut Linear, h: f64) -> bool {
     lin.lu_h = h;
     lin.lu.factor()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn constants_in_closed_form() {
+        // With γ = 2 − √2: −3γ² + 4γ − 2 = 8√2 − 12 and 6(2 − γ) = 6√2, so the error
+        // constant is 4/3 − √2; d = 1 − 1/√2; and (1 − γ)/(2 − γ) = d (one Newton matrix).
+        let sqrt2 = std::f64::consts::SQRT_2;
+        assert!((ERR - (4.0 / 3.0 - sqrt2)).abs() < 1e-15, "{ERR}");
+        assert!((D - (1.0 - 1.0 / sqrt2)).abs() < 1e-15);
+        assert!(((1.0 - GAMMA) / (2.0 - GAMMA) - D).abs() < 1e-15);
+    }
+}
