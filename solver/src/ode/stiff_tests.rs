@@ -121,3 +121,72 @@ fn dense_output_reproduces_each_method_inside_a_step() {
         assert!((out[0] - x[0]).abs() < 1e-14, "{}: the interpolant ends at the step's end", method.name());
     }
 }
+
+#[test]
+fn trbdf2_counts_its_work_and_restarts_cleanly() {
+    // Van der Pol at μ = 1000 from a first step far too long: steps are rejected, Jacobians
+    // and LU factorisations are counted.
+    let method = Method::Trbdf2 { rtol: 1e-6, atol: 1e-9, max_step: 100.0, initial_step: Some(50.0) };
+    let mut integ = Integrator::new(method, 2);
+    let mut x = [2.0, 0.0];
+    let mut t = 0.0;
+    let mut advances = 0;
+    while t < 10.0 {
+        t = integ.advance(&mut VanDerPol(1000.0), t, 10.0, &mut x).unwrap();
+        advances += 1;
+    }
+    let s = integ.stats();
+    assert_eq!(s.steps, advances);
+    assert!(s.rejected > 0 && s.jacobians > 0 && s.factorizations > 0, "{s:?}");
+    assert!(s.evaluations > 2 * s.steps, "{s:?}");
+    // After reset() the run repeats exactly, statistics included.
+    integ.reset();
+    let (mut y, mut t2) = ([2.0, 0.0], 0.0);
+    while t2 < 10.0 {
+        t2 = integ.advance(&mut VanDerPol(1000.0), t2, 10.0, &mut y).unwrap();
+    }
+    assert_eq!((y, integ.stats()), (x, s));
+}
+
+#[test]
+fn trbdf2_one_linear_step_is_its_stability_function() {
+    // x' = λx: the trapezoidal stage gives z = x0·(1 + dhλ)/(1 − dhλ) with d = γ/2, the BDF2
+    // stage y = [z − (1 − γ)²·x0] / (γ(2 − γ)(1 − dhλ)). With λ = −50, h = 0.1.
+    struct Decay;
+    impl OdeSystem for Decay {
+        fn derivatives(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) {
+            dx[0] = -50.0 * x[0];
+        }
+    }
+    let gamma = 2.0 - std::f64::consts::SQRT_2;
+    let (d, hl) = (gamma / 2.0, -5.0);
+    let z = (1.0 + d * hl) / (1.0 - d * hl);
+    let y = (z - (1.0 - gamma).powi(2)) / (gamma * (2.0 - gamma) * (1.0 - d * hl));
+    let method = Method::Trbdf2 { rtol: 10.0, atol: 10.0, max_step: 0.1, initial_step: Some(0.1) };
+    let mut integ = Integrator::new(method, 1);
+    let mut x = [1.0];
+    assert_eq!(integ.advance(&mut Decay, 0.0, 0.1, &mut x), Ok(0.1));
+    assert!((x[0] - y).abs() < 1e-9, "{} vs {y}", x[0]);
+}
+
+#[test]
+fn trbdf2_blow_up_names_the_component() {
+    struct Blow;
+    impl OdeSystem for Blow {
+        fn derivatives(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) {
+            dx[0] = 0.0;
+            dx[1] = x[1] * x[1];
+        }
+    }
+    let mut integ = Integrator::new(Method::Trbdf2 { rtol: 1e-3, atol: 1e-6, max_step: 0.5, initial_step: None }, 2);
+    let mut x = [1.0, 1.0];
+    let mut t = 0.0;
+    let err = loop {
+        match integ.advance(&mut Blow, t, 2.0, &mut x) {
+            Ok(t_new) if t_new < 2.0 => t = t_new,
+            Ok(_) => panic!("passed the blow-up"),
+            Err(e) => break e,
+        }
+    };
+    assert_eq!(err.state(), Some(1), "{err}");
+}
