@@ -296,9 +296,8 @@ fn error_norm_and_the_component_to_blame() {
     assert!((rms - 0.5).abs() < 1e-12, "{rms}");
 }
 
-#[test]
-fn blow_up_names_the_component_and_tiny_steps_are_refused() {
-    // x1 stays put, x2' = x2²: x2 = 1/(1 − t) blows up at t = 1.
+/// x1 stays put, x2' = x2²: x2 = 1/(1 − t) blows up at t = 1. The error `method` stops with.
+pub(super) fn blow_up_error(method: Method) -> SolverError {
     struct Blow;
     impl OdeSystem for Blow {
         fn derivatives(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) {
@@ -306,16 +305,21 @@ fn blow_up_names_the_component_and_tiny_steps_are_refused() {
             dx[1] = x[1] * x[1];
         }
     }
-    let mut integ = Integrator::new(dopri(1e-3, 1e-6, 0.5, None), 2);
+    let mut integ = Integrator::new(method, 2);
     let mut x = [1.0, 1.0];
     let mut t = 0.0;
-    let err = loop {
+    loop {
         match integ.advance(&mut Blow, t, 2.0, &mut x) {
             Ok(t_new) if t_new < 2.0 => t = t_new,
             Ok(_) => panic!("passed the blow-up"),
-            Err(e) => break e,
+            Err(e) => return e,
         }
-    };
+    }
+}
+
+#[test]
+fn blow_up_names_the_component_and_tiny_steps_are_refused() {
+    let err = blow_up_error(dopri(1e-3, 1e-6, 0.5, None));
     assert_eq!(err.state(), Some(1), "{err}");
     // A step that no longer moves t (1 + 6e-17 == 1, while 1 − 6e-17 != 1) is refused,
     // blaming the component given.
