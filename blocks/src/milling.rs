@@ -136,18 +136,18 @@ impl Cutter {
             .is_some_and(|c| !io.reached(self.exit_time(j, c)))
     }
 
-    /// Tooth `j`'s chip thickness before the clip, at angle `phi`, for
-    /// displacement changes over a tooth period `dx`, `dy`.
-    pub fn chip(&self, phi: f64, dx: f64, dy: f64) -> f64 {
-        let (s, c) = phi.sin_cos();
+    /// A tooth's chip thickness before the clip, at the angle whose
+    /// (sin, cos) is `sc`, for displacement changes over a tooth period
+    /// `dx`, `dy`.
+    pub fn chip(&self, (s, c): (f64, f64), dx: f64, dy: f64) -> f64 {
         (self.feed + dx) * s + dy * c
     }
 
-    /// (Ft, Fr, Fx, Fy) of one tooth at angle `phi` cutting a chip `h`.
-    pub fn tooth_force(&self, phi: f64, h: f64) -> [f64; 4] {
+    /// (Ft, Fr, Fx, Fy) of one tooth at the angle whose (sin, cos) is `sc`,
+    /// cutting a chip `h`.
+    pub fn tooth_force(&self, (s, c): (f64, f64), h: f64) -> [f64; 4] {
         let ft = self.kt * self.ap * h;
         let fr = self.kr * ft;
-        let (s, c) = phi.sin_cos();
         [ft, fr, -ft * c - fr * s, ft * s - fr * c]
     }
 
@@ -172,10 +172,11 @@ struct MillingForce {
 }
 
 impl MillingForce {
-    /// Tooth `j`'s chip before the clip at `io.t`, from the inputs.
-    fn raw_chip(&self, j: usize, io: &Io) -> f64 {
-        let phi = self.cutter.angle(j, io.t);
-        self.cutter.chip(phi, io.u(0) - io.u(2), io.u(1) - io.u(3))
+    /// Tooth `j`'s chip before the clip at `io.t`, from the inputs, with
+    /// the (sin, cos) of its angle.
+    fn raw_chip(&self, j: usize, io: &Io) -> (f64, (f64, f64)) {
+        let sc = self.cutter.angle(j, io.t).sin_cos();
+        (self.cutter.chip(sc, io.u(0) - io.u(2), io.u(1) - io.u(3)), sc)
     }
 }
 
@@ -188,7 +189,8 @@ impl Block for MillingForce {
         let (mut fx, mut fy) = (0.0, 0.0);
         for j in 0..self.cutter.teeth {
             let cutting = self.cutter.cutting(j, io);
-            let raw = if cutting { self.raw_chip(j, io) } else { 0.0 };
+            let (raw, sc) = self.raw_chip(j, io);
+            let raw = if cutting { raw } else { 0.0 };
             if io.may_switch() {
                 self.in_cut[j] = cutting;
                 self.chip_positive[j] = raw > 0.0;
@@ -196,7 +198,7 @@ impl Block for MillingForce {
             // Frozen, a cutting tooth keeps its chip formula past h = 0
             // until the crossing ends the step.
             let h = if cutting && self.chip_positive[j] { raw } else { 0.0 };
-            let [ft, fr, x, y] = self.cutter.tooth_force(self.cutter.angle(j, io.t), h);
+            let [ft, fr, x, y] = self.cutter.tooth_force(sc, h);
             fx += x;
             fy += y;
             if self.tooth_outputs {
@@ -244,7 +246,7 @@ impl Block for MillingForce {
 
     fn zero_crossings(&self, io: &Io, g: &mut [f64]) {
         for (j, g) in g.iter_mut().enumerate() {
-            *g = if self.in_cut[j] { self.raw_chip(j, io) } else { 0.0 };
+            *g = if self.in_cut[j] { self.raw_chip(j, io).0 } else { 0.0 };
         }
     }
 
