@@ -216,13 +216,7 @@ pub(crate) fn lti_error(p: &Params, e: LtiError) -> Diagnostic {
 fn build_tf(p: &mut Params) -> Result<Built, Diagnostic> {
     let (num, den) = (p.polynomial_factors("num")?, p.polynomial_factors("den")?);
     let gain = p.number_where("gain", Some(1.0), f64::is_finite, "a finite number")?;
-    let ss = if num.len() == 1 && den.len() == 1 {
-        let scaled: Vec<f64> = num[0].iter().map(|c| c * gain).collect();
-        tf2ss(&scaled, &den[0])
-    } else {
-        factored_tf2ss(&num, &den, gain)
-    }
-    .map_err(|e| lti_error(p, e))?;
+    let ss = factored_tf2ss(&num, &den, gain).map_err(|e| lti_error(p, e))?;
     let n = ss.n;
     Ok(Lti::new(ss, vec![0.0; n]).built())
 }

@@ -60,9 +60,11 @@ impl StateSpace {
 /// `gain · Π num[i](s) / Π den[j](s)`, each factor in descending powers,
 /// as a cascade of sections. Numerator factors are placed highest degree
 /// first, each in the first denominator section (in the order written)
-/// with room left; when one does not fit anywhere (a quadratic zero factor
-/// over first-order poles only), the expanded polynomials are realised in
-/// companion form instead.
+/// with room left. A single factor over a single factor, a zero numerator
+/// factor, or a numerator
+/// factor that fits no section (a quadratic zero factor over first-order
+/// poles only), is realised from the expanded polynomials in companion
+/// form, as [`tf2ss`] does.
 pub fn factored_tf2ss(num: &[Vec<f64>], den: &[Vec<f64>], gain: f64) -> Result<StateSpace, LtiError> {
     let trimmed = |fs: &[Vec<f64>]| fs.iter().map(|f| poly::trim_leading_zeros(f).to_vec()).collect::<Vec<_>>();
     let (num, den) = (trimmed(num), trimmed(den));
@@ -77,17 +79,16 @@ pub fn factored_tf2ss(num: &[Vec<f64>], den: &[Vec<f64>], gain: f64) -> Result<S
     if nn > nd {
         return Err(LtiError::Improper { num_degree: nn, den_degree: nd });
     }
-    if num.iter().any(Vec::is_empty) {
-        return tf2ss(&[0.0], &expand(&den));
-    }
-    let Some(sections) = pair(&num, &den) else {
-        let scaled: Vec<f64> = expand(&num).iter().map(|c| c * gain).collect();
-        return tf2ss(&scaled, &expand(&den));
+    // A zero numerator factor makes the zero system, which the expanded form gives.
+    let cascade = (num.len() > 1 || den.len() > 1) && !num.iter().any(Vec::is_empty);
+    let Some(sections) = cascade.then(|| pair(&num, &den)).flatten() else {
+        let scaled: Vec<f64> = poly::product(&num).iter().map(|c| c * gain).collect();
+        return tf2ss(&scaled, &poly::product(&den));
     };
     let mut total = gain;
     let mut cascade: Option<StateSpace> = None;
     for (zeros, poles) in sections {
-        let (mut n, d) = (expand(&zeros), poles);
+        let (mut n, d) = (poly::product(&zeros), poles);
         // Unit DC gain per section where it is finite and nonzero.
         let (n0, d0) = (n[n.len() - 1], d[d.len() - 1]);
         if n0 != 0.0 && d0 != 0.0 {
@@ -103,19 +104,6 @@ pub fn factored_tf2ss(num: &[Vec<f64>], den: &[Vec<f64>], gain: f64) -> Result<S
     let mut ss = cascade.unwrap_or_else(|| tf2ss(&[1.0], &[1.0]).expect("a unit gain"));
     ss.c.iter_mut().chain(ss.d.iter_mut()).for_each(|v| *v *= total);
     Ok(ss)
-}
-
-/// The product of polynomial factors.
-pub fn expand(factors: &[Vec<f64>]) -> Vec<f64> {
-    factors.iter().fold(vec![1.0], |acc, f| {
-        let mut out = vec![0.0; acc.len() + f.len() - 1];
-        for (i, a) in acc.iter().enumerate() {
-            for (j, b) in f.iter().enumerate() {
-                out[i + j] += a * b;
-            }
-        }
-        out
-    })
 }
 
 /// One section: its numerator factors and its denominator.

@@ -66,7 +66,8 @@ fn sections_keep_the_coefficients_as_written() {
     // within 1e15 (1.1e14), the expanded companion form's 6.4e26.
     let (num, den, k) = eq12();
     let f = factored_tf2ss(&num, &den, k).unwrap();
-    let companion = tf2ss(&expand(&num).iter().map(|c| c * k).collect::<Vec<_>>(), &expand(&den)).unwrap();
+    let companion =
+        tf2ss(&poly::product(&num).iter().map(|c| c * k).collect::<Vec<_>>(), &poly::product(&den)).unwrap();
     let spread = |ss: &StateSpace| {
         let a: Vec<f64> =
             ss.a.iter().chain(&ss.b).chain(&ss.c).chain(&ss.d).map(|v| v.abs()).filter(|v| *v > 0.0).collect();
