@@ -110,7 +110,7 @@ proptest! {
         // h <= ft + |x − x_τ| + |y − y_τ| with the delayed inputs the same signals shifted.
         let (kt, kr, ap, ft) = (800.0, 0.3, 2.0, 0.05);
         let params = format!(
-            "teeth: {teeth}, rpm: {rpm:e}, kt: {kt}, kr: {kr}, ap: {ap}, feed: {ft}, entry: {entry:e}, \
+            "teeth: {teeth}, rpm: {rpm:e}, kt: {kt}, kr: {kr}, ap: {ap}, ft: {ft}, entry: {entry:e}, \
              exit: {:e}, zero_crossing: {zero_crossing}, tooth_outputs: true", entry + sweep);
         let shifted = |s: &Signal| Signal { bias: s.bias + 0.01, ..s.clone() };
         let (xd, yd) = (shifted(&x), shifted(&y));

@@ -51,11 +51,11 @@ fn positive_and_non_negative_parameters() {
     positive_only("tracking_differentiator", "sample_time: 0.01", "delta", false);
     positive_only("tracking_differentiator", "delta: 10, sample_time: 0.01", "h0", false);
     positive_only("tracking_differentiator", "delta: 10, sample_time: 0.01", "c_step", false);
-    positive_only("milling_force", "teeth: 2, rpm: 600, kr: 0.3, ap: 1, feed: 0.1", "kt", true);
-    positive_only("milling_force", "teeth: 2, rpm: 600, kt: 700, ap: 1, feed: 0.1", "kr", true);
-    positive_only("milling_force", "teeth: 2, rpm: 600, kt: 700, kr: 0.3, feed: 0.1", "ap", true);
-    positive_only("milling_force", "teeth: 2, rpm: 600, kt: 700, kr: 0.3, ap: 1", "feed", true);
-    positive_only("milling_force", "teeth: 2, kt: 700, kr: 0.3, ap: 1, feed: 0.1", "rpm", false);
+    positive_only("milling_force", "teeth: 2, rpm: 600, kr: 0.3, ap: 1, ft: 0.1", "kt", true);
+    positive_only("milling_force", "teeth: 2, rpm: 600, kt: 700, ap: 1, ft: 0.1", "kr", true);
+    positive_only("milling_force", "teeth: 2, rpm: 600, kt: 700, kr: 0.3, ft: 0.1", "ap", true);
+    positive_only("milling_force", "teeth: 2, rpm: 600, kt: 700, kr: 0.3, ap: 1", "ft", true);
+    positive_only("milling_force", "teeth: 2, kt: 700, kr: 0.3, ap: 1, ft: 0.1", "rpm", false);
 }
 
 #[test]
@@ -83,7 +83,7 @@ fn ranges_with_two_ends() {
     ok("integrator", "lower: -1, upper: 1, initial: 1");
     refused("integrator", "lower: -1, upper: 1, initial: 2", "initial");
     // Milling: whole teeth from 1 to 64, ae/D in (0, 1], one turn of cut at most.
-    let mill = "rpm: 600, kt: 700, kr: 0.3, ap: 1, feed: 0.1";
+    let mill = "rpm: 600, kt: 700, kr: 0.3, ap: 1, ft: 0.1";
     for good in ["1", "64"] {
         ok("milling_force", &format!("{mill}, teeth: {good}"));
     }
@@ -100,8 +100,8 @@ fn ranges_with_two_ends() {
     refused("milling_force", &format!("{mill}, teeth: 2, entry: 360, exit: 400"), "entry");
     refused("milling_force", &format!("{mill}, teeth: 2, milling: down, entry: 0, exit: 90"), "milling");
     refused("milling_force", &format!("{mill}, teeth: 2, immersion: 0.5, entry: 0, exit: 90"), "immersion");
-    refused("milling_force", "rpm: 600, kt: 700, kr: 0.3, krc: 210, ap: 1, feed: 0.1, teeth: 2", "krc");
-    refused("milling_force", "rpm: 600, kt: 0, krc: 210, ap: 1, feed: 0.1, teeth: 2", "krc");
+    refused("milling_force", "rpm: 600, kt: 700, kr: 0.3, krc: 210, ap: 1, ft: 0.1, teeth: 2", "krc");
+    refused("milling_force", "rpm: 600, kt: 0, krc: 210, ap: 1, ft: 0.1, teeth: 2", "krc");
 }
 
 #[test]

@@ -46,8 +46,8 @@ pub const TYPES: &[BlockType] = &[BlockType {
         PortDoc { name: "fx", doc: "cutting force on the tool along X [N]" },
         PortDoc { name: "fy", doc: "cutting force on the tool along Y [N]" },
         PortDoc { name: "h", doc: "chip thickness per tooth, width N (with tooth_outputs: true)" },
-        PortDoc { name: "ft", doc: "tangential force per tooth, width N (with tooth_outputs: true)" },
-        PortDoc { name: "fr", doc: "radial force per tooth, width N (with tooth_outputs: true)" },
+        PortDoc { name: "ft_tooth", doc: "tangential force per tooth, width N (with tooth_outputs: true)" },
+        PortDoc { name: "fr_tooth", doc: "radial force per tooth, width N (with tooth_outputs: true)" },
     ],
     params: &[
         param("teeth", None, "number of teeth N, 1 … 64"),
@@ -56,14 +56,14 @@ pub const TYPES: &[BlockType] = &[BlockType {
         param("kr", None, "radial-to-tangential ratio Kr = Fr/Ft, >= 0 (or give krc)"),
         param("krc", None, "radial coefficient [N/mm²] instead of kr: Kr = krc/kt"),
         param("ap", None, "axial depth of cut [mm], >= 0"),
-        param("feed", None, "feed per tooth ft [mm], >= 0"),
+        param("ft", None, "feed per tooth ft [mm], >= 0"),
         param("milling", Some("up"), "up | down (with immersion)"),
         param("immersion", Some("1"), "radial immersion ae/D in (0, 1]"),
         param("entry", None, "entry angle φst [deg], instead of milling/immersion"),
         param("exit", None, "exit angle φex [deg], entry < exit <= entry + 360"),
         param("phase", Some("0"), "angle φ0 of tooth 0 at t = 0 [deg]"),
         param("zero_crossing", Some("true"), "watch h_j = 0 (false: a plain max(0, ·))"),
-        param("tooth_outputs", Some("false"), "add the outputs h, ft, fr per tooth"),
+        param("tooth_outputs", Some("false"), "add the outputs h, ft_tooth, fr_tooth per tooth"),
     ],
     build: build_milling_force,
 }];
@@ -300,7 +300,7 @@ fn build_milling_force(p: &mut Params) -> Result<Built, Diagnostic> {
         }
     };
     let ap = p.number_where("ap", None, non_negative, "a depth >= 0 [mm]")?;
-    let feed = p.number_where("feed", None, non_negative, "a feed per tooth >= 0 [mm]")?;
+    let feed = p.number_where("ft", None, non_negative, "a feed per tooth >= 0 [mm]")?;
     let (entry, exit) = immersion_angles(p)?;
     let phase = p.number_where("phase", Some(0.0), f64::is_finite, "a finite angle [deg]")?.to_radians();
     let zero_crossing = p.bool_or("zero_crossing", true)?;
@@ -312,7 +312,7 @@ fn build_milling_force(p: &mut Params) -> Result<Built, Diagnostic> {
     }
     iface = iface.output("fx", Width::Fixed(1)).output("fy", Width::Fixed(1));
     if tooth_outputs {
-        for name in ["h", "ft", "fr"] {
+        for name in ["h", "ft_tooth", "fr_tooth"] {
             iface = iface.output(name, Width::Fixed(teeth));
         }
     }

@@ -265,7 +265,7 @@ fn immersion_from_milling_mode_or_angles() {
 fn built_from_yaml_speed_and_radial_coefficient() {
     use crate::test_rig::{Rig, build};
     // One tooth at 600 rpm (10 rev/s) cutting 0°–90°, at 60° at t = 0: it leaves 30° later, at 1/120 s.
-    let base = "teeth: 1, rpm: 600, kt: 700, ap: 2, feed: 0.05, entry: 0, exit: 90, phase: 60";
+    let base = "teeth: 1, rpm: 600, kt: 700, ap: 2, ft: 0.05, entry: 0, exit: 90, phase: 60";
     let mut by_ratio = Rig::new(build("milling_force", &format!("{base}, kr: 0.3")).unwrap());
     let mut by_coefficient = Rig::new(build("milling_force", &format!("{base}, krc: 210")).unwrap());
     assert!((by_ratio.built.block.next_event(0.0) - (30.0 / 360.0) / 10.0).abs() < 1e-15);
