@@ -6,6 +6,8 @@
 //! of delay 60/(N·rpm), so the delay is visible in the diagram (as in the
 //! paper's Fig. 2).
 
+pub mod lobes;
+
 use crate::param;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Crossing, Diagnostic, Interface, Io, Params, SampleTime, Width};
@@ -21,9 +23,10 @@ pub const TYPES: &[BlockType] = &[BlockType {
           \x20 h_j = max(0, ft·sin φj + (x − x_τ)·sin φj + (y − y_τ)·cos φj)·δ(φj),\n\
           x_τ, y_τ the tool's displacement one tooth period τ = 60/(N·rpm) earlier (wire them from \
           `transport_delay` blocks with that delay); the clip at 0 is the tooth leaving the material. \
-          As in the paper the surface is the one the previous tooth left (single regeneration): a \
-          tooth that jumped out does not remember the older surface it then meets, so an unstable \
-          cut's vibration keeps growing rather than settling on a chatter amplitude. \
+          As in the paper the surface is the one the previous tooth left (single regeneration). A \
+          moderately unstable cut settles on a chatter limit cycle, the teeth leaving the cut for \
+          part of each pass; far beyond the stability limit the vibration keeps growing, since a \
+          tooth that jumped out does not meet the older surface it would meet in a real cut. \
           Forces (eq. 5–6): Ft,j = Kt·ap·h_j, Fr,j = Kr·Ft,j,\n\
           \x20 Fx = Σ_j (−Ft,j·cos φj − Fr,j·sin φj),   Fy = Σ_j (Ft,j·sin φj − Fr,j·cos φj),\n\
           the force on the tool. Units: Kt [N/mm²], ap, ft, x, y [mm] give N. Immersion: `milling: up` \
@@ -278,8 +281,15 @@ fn immersion_angles(p: &mut Params) -> Result<(f64, f64), Diagnostic> {
     }
     let mode = p.choice("milling", &["up", "down"])?;
     let a = p.number_where("immersion", Some(1.0), |v| v > 0.0 && v <= 1.0, "ae/D in (0, 1]")?;
-    let sweep = (1.0 - 2.0 * a).acos();
-    Ok(if mode == "up" { (0.0, sweep) } else { (PI - sweep, PI) })
+    Ok(engagement(mode == "up", a))
+}
+
+/// Entry and exit angles [rad] of up-milling (`up`) or down-milling at
+/// radial immersion ae/D = `immersion`: a cut of arccos(1 − 2·ae/D)
+/// starting at 0 (up) or ending at π (down).
+pub fn engagement(up: bool, immersion: f64) -> (f64, f64) {
+    let sweep = (1.0 - 2.0 * immersion).acos();
+    if up { (0.0, sweep) } else { (PI - sweep, PI) }
 }
 
 fn build_milling_force(p: &mut Params) -> Result<Built, Diagnostic> {
