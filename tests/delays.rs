@@ -94,3 +94,37 @@ fn a_full_history_stops_the_run_with_its_reason() {
         "{error}"
     );
 }
+
+#[test]
+fn milling_regeneration_is_delayed_exactly_one_tooth_period() {
+    // The milling process's delayed x, y against its own x, y one tooth
+    // period τ = 60/(N·rpm) earlier. At 10 000 rpm τ = 2 ms is 200 steps
+    // and the tooth events (entries every τ, exits a quarter turn later at
+    // ae/D = 0.5) fall on the grid, so each sample of the delay output
+    // meets a recorded sample τ earlier: no interpolation, equal to rounding
+    // (one step off would differ by several per cent of the amplitude).
+    let yaml = "simulation: { stop: 0.05, solver: { method: rk4, step: 1.0e-5 } }\n\
+                blocks:\n  zero: { type: constant, value: 0 }\n  \
+                mill: { type: subsystem, file: lib/milling_process.yaml, parameters: { rpm: 10000, immersion: 0.5 } }\n\
+                wires: [zero -> mill.ux, zero -> mill.uy]\n\
+                record: [x: mill.x, y: mill.y, xd: mill/x_prev, yd: mill/y_prev]\n";
+    let model = ctlgraph::compile_str(yaml, "graphs/milling/delay_check.yaml", &[]).unwrap();
+    let trace = ctlgraph::simulate(model, None).unwrap();
+    let t = trace.t();
+    let tau = 60.0 / (3.0 * 10_000.0);
+    let mut compared = 0;
+    for (now, delayed) in [("x", "xd"), ("y", "yd")] {
+        let (v, d) = (trace.column(now).unwrap(), trace.column(delayed).unwrap());
+        let scale = v.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(scale > 1e-4, "{now} never moves");
+        for k in 0..t.len() {
+            let j = t.partition_point(|&s| s < t[k] - tau - 1e-12);
+            if j >= t.len() || (t[j] - (t[k] - tau)).abs() > 1e-12 {
+                continue;
+            }
+            assert!((d[k] - v[j]).abs() <= 1e-10 * scale, "{delayed} at {}: {} vs {}", t[k], d[k], v[j]);
+            compared += 1;
+        }
+    }
+    assert!(compared > 2 * 4000, "{compared} samples compared");
+}
