@@ -7,11 +7,13 @@
 //! `Block`: `output` computes outputs from inputs and state, `update` moves
 //! discrete or major-step memory forward. Here the relay's memory (on/off)
 //! changes only at major steps, so the solver's minor steps see it fixed.
+//! A block derives `Clone`, so that a snapshot of a run copies its memory.
 
 use ctlgraph::core::registry::{BlockType, Built, ParamDoc, PortDoc};
 use ctlgraph::core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 
 /// Switches on above `on`, off below `off`; output `high` or `low`.
+#[derive(Clone)]
 struct Relay {
     on: f64,
     off: f64,

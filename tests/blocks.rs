@@ -179,6 +179,7 @@ fn a_block_whose_events_stop_time_is_reported_not_looped_on() {
     use ctlgraph::core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
     // Events every 1e-300 s from t = 1: not representable there, so time
     // would stand still.
+    #[derive(Clone)]
     struct Stuck;
     impl Block for Stuck {
         fn output(&mut self, io: &mut Io) {

@@ -124,6 +124,7 @@ pub fn fhan(x1: f64, x2: f64, r: f64, h0: f64) -> f64 {
 }
 
 /// The discrete tracking differentiator.
+#[derive(Clone)]
 pub struct TrackingDifferentiator {
     pub delta: f64,
     pub h0: f64,
@@ -202,6 +203,7 @@ pub fn bandwidth_gains(order: usize, omega: f64) -> Vec<f64> {
 }
 
 /// The LESO; discrete when `h > 0`.
+#[derive(Clone)]
 pub struct Leso {
     beta: Vec<f64>,
     b0: f64,
@@ -312,6 +314,7 @@ fn build_leso(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// The LSEF law; `alpha_ports` are input indices of tuned gains.
+#[derive(Clone)]
 struct Lsef {
     alpha: [f64; 2],
     alpha_ports: [Option<usize>; 2],

@@ -110,6 +110,7 @@ pub(crate) fn initial_vector(v: &[f64], n: usize) -> Result<Vec<f64>, String> {
 }
 
 /// s/(τs + 1), elementwise.
+#[derive(Clone)]
 struct Derivative {
     tau: f64,
     initial_input: f64,
@@ -151,6 +152,7 @@ fn build_derivative(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// A continuous LTI system; `y` is scratch so output needs no aliasing.
+#[derive(Clone)]
 pub struct Lti {
     ss: StateSpace,
     x0: Vec<f64>,

@@ -81,6 +81,7 @@ pub const TYPES: &[BlockType] = &[
 
 /// The input's past at major steps: times and values in a ring buffer that
 /// doubles when full, up to a limit.
+#[derive(Clone)]
 pub struct History {
     width: usize,
     times: Vec<f64>,
@@ -238,6 +239,7 @@ impl History {
 }
 
 /// Fixed or variable transport delay.
+#[derive(Clone)]
 pub struct TransportDelay {
     /// The fixed delay, or (variable) the largest.
     delay: f64,
@@ -332,6 +334,7 @@ fn build_variable_delay(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// z^-N, elementwise: a ring of N samples per element.
+#[derive(Clone)]
 pub struct Delay {
     samples: usize,
     initial: Vec<f64>,

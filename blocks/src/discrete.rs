@@ -51,6 +51,7 @@ pub const TYPES: &[BlockType] = &[
 ];
 
 /// A discrete LTI system: state advanced in `update`, at sample hits.
+#[derive(Clone)]
 pub struct DiscreteLti {
     ss: StateSpace,
     x: Vec<f64>,
@@ -94,6 +95,7 @@ fn build_unit_delay(p: &mut Params) -> Result<Built, Diagnostic> {
     crate::delay::build_delay_of(p, 1)
 }
 
+#[derive(Clone)]
 struct Hold;
 
 impl Block for Hold {

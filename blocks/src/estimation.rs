@@ -33,6 +33,7 @@ pub const TYPES: &[BlockType] = &[BlockType {
 }];
 
 /// The RLS estimator; all buffers allocated once.
+#[derive(Clone)]
 pub struct Rls {
     lambda: f64,
     p0: f64,

@@ -86,6 +86,7 @@ impl Trigger {
 }
 
 /// Relay with hysteresis; see the type's doc.
+#[derive(Clone)]
 pub struct Relay {
     pub on_threshold: f64,
     pub off_threshold: f64,
@@ -157,6 +158,7 @@ fn build_relay(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// Hit crossing; see the type's doc.
+#[derive(Clone)]
 pub struct HitCrossing {
     level: f64,
     trigger: Trigger,

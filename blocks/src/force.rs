@@ -169,6 +169,7 @@ pub const TYPES: &[BlockType] = &[
 ];
 
 /// m x'' + b x' + k x = e, continuous.
+#[derive(Clone)]
 struct Impedance {
     m: f64,
     b: f64,
@@ -191,6 +192,7 @@ impl Block for Impedance {
 
 /// A discrete filter whose state stands still and output holds while its
 /// `hold` input (port 1) is nonzero.
+#[derive(Clone)]
 struct Holdable {
     filter: DiscreteLti,
     last: f64,
@@ -270,6 +272,7 @@ pub fn normal_force(fx: f64, fz: f64, climbing: bool, mu_u: f64, mu_d: f64) -> f
     }
 }
 
+#[derive(Clone)]
 struct NormalForce {
     mu_u: f64,
     mu_d: f64,
@@ -301,6 +304,7 @@ fn build_normal_force(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// A surface height profile and its slope.
+#[derive(Clone)]
 enum Profile {
     Expr { expr: Expr, step: f64 },
     Table(crate::tables::Table),
@@ -324,6 +328,7 @@ impl Profile {
 }
 
 /// Contact forces of a probe on the profile (see the block doc).
+#[derive(Clone)]
 pub struct Contact {
     profile: Profile,
     stiffness: f64,
@@ -443,6 +448,7 @@ fn build_contact(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// Je x'' + Be x' = u − d.
+#[derive(Clone)]
 struct FeedDrive {
     je: f64,
     be: f64,
@@ -488,6 +494,7 @@ fn build_feed_drive(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// p'' = ωn²(u − p) − 2ζωn p'.
+#[derive(Clone)]
 struct ReferenceFilter {
     omega: f64,
     zeta: f64,

@@ -64,6 +64,7 @@ enum Mode {
 }
 
 /// Elementwise integrator; see the type's doc.
+#[derive(Clone)]
 pub struct Integrator {
     initial: Vec<f64>,
     x0: Vec<f64>,

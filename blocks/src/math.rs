@@ -162,6 +162,7 @@ fn build_sign(p: &mut Params) -> Result<Built, Diagnostic> {
     .build(p)
 }
 
+#[derive(Clone)]
 enum Gain {
     Elementwise(Vec<f64>),
     /// Row-major, `rows × cols`.
@@ -231,6 +232,7 @@ fn build_gain(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// Σ sᵢ uᵢ elementwise, or the sum of one input's elements.
+#[derive(Clone)]
 struct Sum {
     signs: Vec<f64>,
 }
@@ -283,6 +285,7 @@ fn build_sum(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// u1 ∘ u2 ∘ … with ∘ ∈ {·, /}.
+#[derive(Clone)]
 struct Product {
     divide: Vec<bool>,
 }
@@ -326,6 +329,7 @@ fn build_divide(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// Elementwise extremum over inputs, or over the elements of one input.
+#[derive(Clone)]
 struct Extremum {
     max: bool,
     inputs: usize,
@@ -407,6 +411,7 @@ fn build_max(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// A compiled expression over `[u1, …, un, t]`.
+#[derive(Clone)]
 struct Fcn {
     expr: Expr,
     vars: Vec<f64>,

@@ -166,6 +166,7 @@ impl Cutter {
 
 /// The block: the cutter and, per tooth, whether it is in the cut and
 /// whether its chip is positive (the mode, frozen in minor steps).
+#[derive(Clone)]
 struct MillingForce {
     cutter: Cutter,
     zero_crossing: bool,

@@ -66,6 +66,7 @@ pub const TYPES: &[BlockType] = &[
 ];
 
 /// A seeded stream of uniform and standard normal numbers.
+#[derive(Clone)]
 pub struct Stream {
     seed: u64,
     rng: ChaCha8Rng,
@@ -108,6 +109,7 @@ enum Law {
 }
 
 /// Draws at each sample hit (in `update`) and holds the value.
+#[derive(Clone)]
 struct Noise {
     law: Law,
     stream: Stream,

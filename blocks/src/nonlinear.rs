@@ -81,6 +81,7 @@ pub const TYPES: &[BlockType] = &[
 /// piece r lies between breakpoint r − 1 and r, a breakpoint itself
 /// belonging to the piece below — and frozen in minor steps; the zero
 /// crossings are u − breakpoint for every element and breakpoint.
+#[derive(Clone)]
 pub struct Piecewise {
     breaks: Vec<f64>,
     /// Piece `r` at input `u`, given the breakpoints.
@@ -171,6 +172,7 @@ fn build_dead_zone(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 /// Slew-rate limiter; see the type's doc for the equation.
+#[derive(Clone)]
 pub struct RateLimiter {
     pub rising: f64,
     pub falling: f64,

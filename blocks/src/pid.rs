@@ -89,6 +89,7 @@ impl PidLaw {
 /// decision is taken at major steps and held through the solver's stages:
 /// decided per stage, it makes the right-hand side switch with the state,
 /// and an adaptive solver chatters on the limit with ever smaller steps.
+#[derive(Clone)]
 struct ContinuousPid {
     law: PidLaw,
     initial: f64,
@@ -136,6 +137,7 @@ impl Block for ContinuousPid {
 }
 
 /// Discrete PID: forward-Euler integral, backward-Euler derivative filter.
+#[derive(Clone)]
 struct DiscretePid {
     law: PidLaw,
     period: f64,

@@ -74,6 +74,7 @@ pub const TYPES: &[BlockType] = &[
 ];
 
 /// The paper's SMC law; d̂ kept in the block (discrete) or in the state.
+#[derive(Clone)]
 pub struct SlidingMode {
     pub lambda: f64,
     pub ks: f64,
@@ -166,6 +167,7 @@ fn build_sliding_mode(p: &mut Params) -> Result<Built, Diagnostic> {
     Ok(Built::new(block, iface))
 }
 
+#[derive(Clone)]
 struct Smc {
     lambda: f64,
     k: f64,

@@ -96,12 +96,13 @@ pub const TYPES: &[BlockType] = &[
 ];
 
 /// A source whose output is a function of time only.
-struct TimeFn<F: Fn(&Io) -> f64 + Send> {
+#[derive(Clone)]
+struct TimeFn<F: Fn(&Io) -> f64 + Send + Clone> {
     f: F,
     events: Vec<f64>,
 }
 
-impl<F: Fn(&Io) -> f64 + Send> Block for TimeFn<F> {
+impl<F: Fn(&Io) -> f64 + Send + Clone> Block for TimeFn<F> {
     fn updates(&self) -> bool {
         false
     }
@@ -116,7 +117,7 @@ impl<F: Fn(&Io) -> f64 + Send> Block for TimeFn<F> {
 }
 
 /// A source y = f(t). `piecewise` declares that f changes only at `events`.
-fn scalar_source<F: Fn(&Io) -> f64 + Send + 'static>(
+fn scalar_source<F: Fn(&Io) -> f64 + Send + Clone + 'static>(
     p: &mut Params,
     events: Vec<f64>,
     piecewise: bool,
@@ -129,6 +130,7 @@ fn scalar_source<F: Fn(&Io) -> f64 + Send + 'static>(
 }
 
 /// Zero outside an active window [on, off); the window's edges are events.
+#[derive(Clone)]
 struct Windowed {
     inner: Box<dyn Block>,
     on: f64,
@@ -195,6 +197,7 @@ fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
     if value.is_empty() {
         return Err(p.error("value", "needs at least one number"));
     }
+    #[derive(Clone)]
     struct Constant(Vec<f64>);
     impl Block for Constant {
         fn updates(&self) -> bool {
@@ -249,6 +252,7 @@ fn build_pulse(p: &mut Params) -> Result<Built, Diagnostic> {
 /// Edges are computed as `delay + k·period` (and `+ high`), the same
 /// expressions `next_event` hands the simulator, so `reached` compares equal
 /// floating-point values at the edges.
+#[derive(Clone)]
 struct Pulse {
     amplitude: f64,
     period: f64,

@@ -112,6 +112,7 @@ impl Table {
     }
 }
 
+#[derive(Clone)]
 struct Lookup(Table);
 
 impl Block for Lookup {
@@ -142,6 +143,7 @@ fn build_lookup(p: &mut Params) -> Result<Built, Diagnostic> {
     Ok(Built::new(Lookup(table), iface))
 }
 
+#[derive(Clone)]
 struct Series(Table);
 
 impl Block for Series {

@@ -308,7 +308,9 @@ impl<'a> Io<'a> {
 }
 
 /// A block of the library. See the module docs for when each method runs.
-pub trait Block: Send {
+/// Blocks are `Clone` (derive it): a snapshot of a run
+/// ([`crate::Simulator::state`]) copies every block's memory.
+pub trait Block: Send + dyn_clone::DynClone {
     /// Receives the resolved common width (only called for blocks with a
     /// [`Width::Common`] port), before any other call. Allocate here.
     fn set_width(&mut self, _width: usize) -> Result<(), String> {
@@ -432,4 +434,12 @@ pub trait Block: Send {
     fn major_step(&mut self, _io: &Io, _x: &mut [f64]) -> bool {
         false
     }
+
+    /// The value a host program sets, for the compiler's top-level inports
+    /// only; library blocks keep the default.
+    fn external_input(&mut self) -> Option<&mut [f64]> {
+        None
+    }
 }
+
+dyn_clone::clone_trait_object!(Block);

@@ -17,6 +17,14 @@ pub struct DenseLu {
     scratch: MemBuffer,
 }
 
+/// A copy with the same matrix and factors (the scratch is allocated anew:
+/// it holds nothing between calls).
+impl Clone for DenseLu {
+    fn clone(&self) -> Self {
+        DenseLu { a: self.a.clone(), perm: self.perm.clone(), perm_inv: self.perm_inv.clone(), ..DenseLu::new(self.n) }
+    }
+}
+
 impl DenseLu {
     pub fn new(n: usize) -> Self {
         let req = StackReq::any_of(&[

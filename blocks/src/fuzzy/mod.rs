@@ -46,6 +46,7 @@ pub const TYPES: &[BlockType] = &[BlockType {
     build: build_fuzzy,
 }];
 
+#[derive(Clone)]
 struct FuzzyBlock {
     fis: Fis,
     x: Vec<f64>,

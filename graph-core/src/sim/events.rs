@@ -48,6 +48,7 @@ fn tolerance(t: f64) -> f64 {
 }
 
 /// The watched zero-crossing functions of a model and their state.
+#[derive(Clone)]
 pub(crate) struct Watch {
     mode: ZeroCrossing,
     /// Continuous blocks with zero crossings, execution order: their

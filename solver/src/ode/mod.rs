@@ -251,6 +251,7 @@ fn scaled_rms(err: impl Iterator<Item = f64>, a: &[f64], b: &[f64], rtol: f64, a
 }
 
 /// A stepper with preallocated stage buffers for a system of fixed size.
+#[derive(Clone)]
 pub struct Integrator {
     method: Method,
     k: [Vec<f64>; 7],

@@ -33,6 +33,7 @@ const MAX_NEWTON: usize = 6;
 const NEWTON_TOL: f64 = 0.03;
 
 /// The Newton matrix and its factors, with the scratch a solve needs.
+#[derive(Clone)]
 struct Linear {
     lu: DenseLu,
     /// Jacobian, column-major.
@@ -45,6 +46,7 @@ struct Linear {
 }
 
 /// Work space of the implicit method, allocated once.
+#[derive(Clone)]
 pub(crate) struct Work {
     lin: Linear,
     /// f at the start of the current step (at the end of the last one).
