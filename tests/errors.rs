@@ -216,7 +216,7 @@ fn nothing_a_user_writes_panics() {
         "blocks: { p: { type: pulse, duty: 1.5 } }",
         "blocks: { l: { type: lookup_table_1d, x: [1, 1], y: [1, 2] } }",
         "blocks: { f: { type: fcn, expr: \"u1 +* 2\" } }",
-        "blocks: { i: { type: inport } }",
+        "blocks: { i: { type: inport, width: 0 } }",
     ];
     for yaml in cases {
         let result = std::panic::catch_unwind(|| ctlgraph::compile_str(yaml, "test.yaml", &[]).err());

@@ -85,19 +85,26 @@ pub const TYPES: &[BlockType] = &[
     BlockType {
         name: "inport",
         category: "structure",
-        summary: "An input of a subsystem (the block's name is the port's name).",
+        summary: "An input of a subsystem, or of the graph itself (the block's name is the port's name).",
         doc: "Inside a subsystem file: the signal wired to the subsystem's port of this name. Resolved \
-              at compile time; costs nothing at run time.",
+              at compile time; costs nothing at run time. At the top level of the graph: an input a \
+              program driving the graph step by step sets (`Simulator::set_input`); it holds its \
+              value between major steps (a zero-order hold) and is \
+              `value` until set — so a plain `ctlgraph run` sees `value`.",
         inputs: &[],
-        outputs: &[PortDoc { name: "out", doc: "the outer signal" }],
-        params: &[],
+        outputs: &[PortDoc { name: "out", doc: "the outer signal (top level: the host's value)" }],
+        params: &[
+            param("width", Some("1"), "top level only: the number of elements"),
+            param("value", Some("0"), "top level only: the value before the host sets one"),
+        ],
         build: structural,
     },
     BlockType {
         name: "outport",
         category: "structure",
-        summary: "An output of a subsystem (the block's name is the port's name).",
-        doc: "Inside a subsystem file: wire the signal to export into it. Resolved at compile time.",
+        summary: "An output of a subsystem, or of the graph itself (the block's name is the port's name).",
+        doc: "Inside a subsystem file: wire the signal to export into it. Resolved at compile time. At the \
+              top level: a signal a program driving the graph reads by this name (`Simulator::output`).",
         inputs: &[PortDoc { name: "in", doc: "the signal to export" }],
         outputs: &[],
         params: &[],
@@ -128,6 +135,7 @@ fn widths(p: &mut Params, count_key: &str) -> Result<Vec<usize>, Diagnostic> {
 }
 
 /// Concatenates the inputs in port order.
+#[derive(Clone)]
 struct Concat;
 
 impl Block for Concat {
@@ -155,6 +163,7 @@ fn build_mux(p: &mut Params) -> Result<Built, Diagnostic> {
     Ok(Built::new(Concat, iface.output("y", Width::Fixed(ws.iter().sum()))))
 }
 
+#[derive(Clone)]
 struct Split(Vec<usize>);
 
 impl Block for Split {
@@ -186,6 +195,7 @@ fn build_demux(p: &mut Params) -> Result<Built, Diagnostic> {
     Ok(Built::new(Split(ws), iface))
 }
 
+#[derive(Clone)]
 struct Selector(Vec<usize>);
 
 impl Block for Selector {
@@ -227,6 +237,7 @@ enum Criterion {
     NonZero,
 }
 
+#[derive(Clone)]
 struct Switch {
     threshold: f64,
     criterion: Criterion,

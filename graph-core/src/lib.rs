@@ -28,4 +28,4 @@ pub use diag::{Diagnostic, Pos};
 pub use flatten::{FlatGraph, SimConfig, ZeroCrossing, load, load_str};
 pub use params::Params;
 pub use registry::{BlockType, Built, ParamDoc, PortDoc, Registry};
-pub use sim::{RunStats, SimError, Simulator};
+pub use sim::{RunStats, SimError, Simulator, Snapshot};

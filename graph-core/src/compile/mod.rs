@@ -4,12 +4,13 @@
 //! signal buffer with every input resolved to an index.
 
 mod between;
+mod external;
 mod schedule;
 mod wiring;
 
 use crate::block::{Block, Interface, Port, SampleTime, Width};
 use crate::diag::{Diagnostic, Pos};
-use crate::flatten::{FlatBlock, FlatGraph, MAX_STEPS, SimConfig};
+use crate::flatten::{FlatBlock, FlatGraph, INPORT, MAX_STEPS, SimConfig};
 use crate::registry::Registry;
 pub(crate) use between::Between;
 use schedule::{resolve_rates, sort};
@@ -111,6 +112,12 @@ pub struct Model {
     /// Top-level subsystem outports by name (`sub.port`, `sub`) and the
     /// real signal each carries (for analysis selections).
     pub subsystem_outputs: Vec<(String, Port)>,
+    /// The graph's own inputs, its top-level `inport` blocks: name and
+    /// block index (see [`crate::Simulator::set_input`]).
+    pub external_inputs: Vec<(String, usize)>,
+    /// The graph's own outputs, its top-level `outport` blocks: name and
+    /// the signal each carries.
+    pub external_outputs: Vec<(String, Port)>,
 }
 
 struct Node<'g> {
@@ -218,6 +225,13 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     }
     let columns = record_columns(g, &nodes, &index, &direct, &out_offset)?;
     let subsystem_outputs = wiring::subsystem_outputs(g, &nodes, &index, &direct, &out_offset);
+    let external_inputs = order
+        .iter()
+        .enumerate()
+        .filter(|&(_, &i)| nodes[i].flat.spec.type_name == INPORT && !nodes[i].flat.path.contains('/'))
+        .map(|(k, &i)| (nodes[i].flat.path.clone(), k))
+        .collect();
+    let external_outputs = wiring::external_outputs(&nodes, &direct, &out_offset);
     let slots = meta
         .iter()
         .map(|m| Slot {
@@ -260,6 +274,8 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         analysis: g.analysis.clone(),
         loop_figures: None,
         subsystem_outputs,
+        external_inputs,
+        external_outputs,
     };
     between::plan(&mut model, &piecewise);
     if let Some(sel) = &model.analysis {
@@ -308,6 +324,18 @@ impl Model {
     /// The signal buffer offset of `name`: `block`, `block.port`, with `[k]`
     /// (1-based) for an element of a vector signal.
     pub fn signal_offset(&self, name: &str) -> Result<usize, Diagnostic> {
+        let port = self.signal_port(name)?;
+        match port.width {
+            1 => Ok(port.offset),
+            w => Err(Diagnostic::plain(format!("signal `{name}` has {w} elements"))
+                .with_hint(format!("analyse one: `{name}[1]` … `{name}[{w}]`"))),
+        }
+    }
+
+    /// Where signal `name` lives in the signal buffer: `block`,
+    /// `block.port`, `sub.port` of a top-level subsystem, the whole vector
+    /// or, with `[k]` (1-based), one element.
+    pub fn signal_port(&self, name: &str) -> Result<Port, Diagnostic> {
         let model = self;
         let (base, element) = match name.strip_suffix(']').and_then(|n| n.split_once('[')) {
             Some((b, k)) => {
@@ -318,14 +346,21 @@ impl Model {
             }
             None => (name, None),
         };
-        if let Ok(k) = model.subsystem_outputs.binary_search_by(|(n, _)| n.as_str().cmp(base)) {
-            let port = model.subsystem_outputs[k].1;
-            return match element {
-                None if port.width == 1 => Ok(port.offset),
-                Some(e) if e <= port.width => Ok(port.offset + e - 1),
-                _ => Err(Diagnostic::plain(format!("signal `{name}` has {} elements", port.width))),
-            };
+        let port = match model.subsystem_outputs.binary_search_by(|(n, _)| n.as_str().cmp(base)) {
+            Ok(k) => model.subsystem_outputs[k].1,
+            Err(_) => model.block_output(name, base)?,
+        };
+        match element {
+            None => Ok(port),
+            Some(k) if k <= port.width => Ok(Port { offset: port.offset + k - 1, width: 1 }),
+            Some(k) => Err(Diagnostic::plain(format!("signal `{name}`: element {k} of {}", port.width))),
         }
+    }
+
+    /// The output port `base` names (`block` or `block.port`); `name` is
+    /// the whole signal name, for messages.
+    fn block_output(&self, name: &str, base: &str) -> Result<Port, Diagnostic> {
+        let model = self;
         let (block, port) = match model.meta.iter().position(|m| m.name == base) {
             Some(i) => (i, None),
             None => match base.rsplit_once('.') {
@@ -357,14 +392,7 @@ impl Model {
                     )));
             }
         };
-        let port = model.out_ports[meta.outputs.start + k];
-        match (element, port.width) {
-            (None, 1) => Ok(port.offset),
-            (None, w) => Err(Diagnostic::plain(format!("signal `{name}` has {w} elements"))
-                .with_hint(format!("analyse one: `{name}[1]` … `{name}[{w}]`"))),
-            (Some(k), w) if k <= w => Ok(port.offset + k - 1),
-            (Some(k), w) => Err(Diagnostic::plain(format!("signal `{name}`: element {k} of {w}"))),
-        }
+        Ok(model.out_ports[meta.outputs.start + k])
     }
 
     /// The block owning signal `offset` and the name of its output port.

@@ -2,6 +2,7 @@
 //! registry, wires resolved to ports (through subsystem ports), widths
 //! propagated, recorded columns located.
 
+use super::external::ExternalInput;
 use super::{Column, Driver, Node, resolved};
 use crate::block::{Interface, Port, SampleTime, Width};
 use crate::diag::{Diagnostic, Pos};
@@ -25,15 +26,21 @@ pub(super) fn instantiate<'g>(g: &'g FlatGraph, reg: &Registry) -> Result<Vec<No
         };
         let mut params = Params::new(&fb.path, ty.name, &spec.pos, &spec.params, &fb.scope, &fb.dir, ty.params)
             .with_seed(g.sim.seed);
-        if ty.name == INPORT || ty.name == OUTPORT {
+        let top_level = !fb.path.contains('/');
+        if ty.name == INPORT && top_level {
+            // The graph's own input, set by a host program between steps.
+            let (iface, block) = ExternalInput::build(&mut params)?;
             params.finish()?;
-            if ty.name == INPORT && !fb.path.contains('/') {
-                return Err(Diagnostic::at(
-                    &spec.type_pos,
-                    format!("block `{}`: an inport only makes sense inside a subsystem", fb.path),
-                )
-                .with_hint("a top-level graph gets its inputs from source blocks (constant, step, from_csv, …)"));
+            nodes.push(Node { flat: fb, iface, block: Some(Box::new(block)), is_virtual: false, width: None });
+            continue;
+        }
+        if ty.name == INPORT || ty.name == OUTPORT {
+            for key in ["width", "value"] {
+                if params.has(key) {
+                    return Err(params.error(key, "only a top-level inport (a host program's input) takes it"));
+                }
             }
+            params.finish()?;
             let iface =
                 Interface::new(SampleTime::Inherited).input("in", Width::Common, true).output("out", Width::Common);
             nodes.push(Node { flat: fb, iface, block: None, is_virtual: true, width: None });
@@ -233,6 +240,29 @@ pub(super) fn subsystem_outputs(
         }
     }
     named.sort_by(|a, b| a.0.cmp(&b.0));
+    named
+}
+
+/// The real signal behind each top-level outport, by the outport's name.
+pub(super) fn external_outputs(
+    nodes: &[Node],
+    direct: &[Vec<Option<Driver>>],
+    out_offset: &[Vec<Port>],
+) -> Vec<(String, Port)> {
+    let mut named = Vec::new();
+    for (i, node) in nodes.iter().enumerate() {
+        if node.flat.spec.type_name != OUTPORT || node.flat.path.contains('/') {
+            continue;
+        }
+        let (mut src, mut p) = (i, 0);
+        while nodes[src].is_virtual {
+            let Some(d) = &direct[src][0] else { break };
+            (src, p) = (d.src, d.port);
+        }
+        if !nodes[src].is_virtual {
+            named.push((node.flat.path.clone(), out_offset[src][p]));
+        }
+    }
     named
 }
 

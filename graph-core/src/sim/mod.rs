@@ -11,6 +11,8 @@
 //! allocates nothing.
 
 mod events;
+mod host;
+pub use host::Snapshot;
 
 use crate::block::{Io, Port};
 use crate::compile::{Between, Model, Rate, Slot};
@@ -35,6 +37,9 @@ pub enum SimError {
     /// A block's zero crossings kept firing at (nearly) one instant: the
     /// model chatters (a Zeno or sliding behaviour).
     Chattering { t: f64, block: String, what: String },
+    /// A program driving the run asked for something impossible (see
+    /// [`Simulator::advance_to`]).
+    Host(String),
 }
 
 impl fmt::Display for SimError {
@@ -66,6 +71,7 @@ impl fmt::Display for SimError {
                  hint: `solver: {{ zero_crossing: adaptive }}` ignores a chattering block's crossings, \
                  or reformulate (add hysteresis, a boundary layer)"
             ),
+            SimError::Host(message) => f.write_str(message),
         }
     }
 }
@@ -128,6 +134,9 @@ pub struct RunStats {
     pub events: u64,
 }
 
+/// Numbers simulators, so a snapshot is restored only where it was taken.
+static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
 /// A model being simulated.
 pub struct Simulator {
     model: Model,
@@ -158,9 +167,16 @@ pub struct Simulator {
     updating: Vec<usize>,
     /// Whether this major step is at a block event (see `Between::event_only`).
     at_event: bool,
+    /// A host set an input since the last outputs (see [`Simulator::set_input`]).
+    inputs_changed: bool,
+    /// Where [`Simulator::advance_to`] must land (infinite otherwise).
+    pause: f64,
+    /// Tells this simulator's snapshots from others'.
+    id: u64,
 }
 
 /// A held LTI block: its exact transitions and its input at the last major step.
+#[derive(Clone)]
 struct Held {
     block: usize,
     zoh: Zoh,
@@ -219,6 +235,9 @@ impl Simulator {
             between: model.between.clone(),
             updating: (0..model.blocks.len()).filter(|&i| model.blocks[i].updates()).collect(),
             at_event: true,
+            inputs_changed: false,
+            pause: f64::INFINITY,
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             model,
         };
         sim.reset();
@@ -324,7 +343,7 @@ impl Simulator {
     /// first pass only.
     fn sweep(&mut self) {
         let m = &mut self.model;
-        let skip_event_only = !self.first && !self.at_event;
+        let skip_event_only = !self.first && !self.at_event && !self.inputs_changed;
         for (i, block) in m.blocks.iter_mut().enumerate() {
             let slot = &m.slots[i];
             if skip_event_only && self.between.event_only[i] {
@@ -359,6 +378,7 @@ impl Simulator {
             self.sweep();
         }
         self.first = false;
+        self.inputs_changed = false;
         self.watch.record_signs(&mut self.model, &mut self.signals, &self.x, self.t);
         if !all_finite(&self.signals)
             && let Some(k) = self.signals.iter().position(|v| !v.is_finite())
@@ -527,7 +547,9 @@ impl Simulator {
         if self.grid_step > 0.0 {
             next = next.min(self.grid.next);
         }
-        if self.next_event <= next + self.tol { self.next_event } else { next }
+        let next = if self.next_event <= next + self.tol { self.next_event } else { next };
+        // A host's landing point, unless a step of the run's own falls on it.
+        if self.pause < next - self.tol { self.pause } else { next }
     }
 
     /// The first block event strictly after the current time. Cached in

@@ -1,0 +1,196 @@
+//! Driving a simulation from a program, step by step: set the graph's
+//! inputs (its top-level `inport` blocks), advance to a time, read its
+//! outputs (top-level `outport` blocks) or any named signal — for
+//! co-simulation, hardware-in-the-loop and real-time use.
+//!
+//! Stepping is the run loop cut into pieces: `advance_to` takes the same
+//! major steps `run` would, plus one landing exactly on the requested
+//! time when no step of the run's own falls there (within the simulator's
+//! time tolerance). So with a fixed-step method and landing times on its
+//! grid, stepping in chunks gives the same numbers as one run, bit for bit.
+//! An adaptive method's steps are cut at each landing time, which changes
+//! them (within the tolerances).
+
+use super::{Clock, Held, SimError, Simulator, Watch};
+use crate::block::Block;
+use crate::diag::Diagnostic;
+use ctlgraph_solver::Integrator;
+
+/// A run's complete state at one instant — time, states, signals, every
+/// block's memory, the solver's and the event detection's — to return to
+/// with [`Simulator::restore`]. Restoring and running on gives the same
+/// numbers as running on from where it was taken.
+#[derive(Clone)]
+pub struct Snapshot {
+    /// Which simulator it was taken of (a snapshot fits only that model).
+    owner: u64,
+    blocks: Vec<Box<dyn Block>>,
+    frozen: Vec<bool>,
+    signals: Vec<f64>,
+    x: Vec<f64>,
+    integ: Integrator,
+    clocks: Vec<Clock>,
+    grid: Clock,
+    t: f64,
+    stop: f64,
+    first: bool,
+    next_event: f64,
+    major_steps: u64,
+    stalled: u32,
+    watch: Watch,
+    held: Vec<Held>,
+    at_event: bool,
+    inputs_changed: bool,
+}
+
+impl Snapshot {
+    /// The time it was taken at.
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+}
+
+impl Simulator {
+    /// The graph's inputs (top-level `inport` blocks), in execution order.
+    pub fn input_names(&self) -> impl Iterator<Item = &str> {
+        self.model.external_inputs.iter().map(|(n, _)| n.as_str())
+    }
+
+    /// The graph's outputs (top-level `outport` blocks).
+    pub fn output_names(&self) -> impl Iterator<Item = &str> {
+        self.model.external_outputs.iter().map(|(n, _)| n.as_str())
+    }
+
+    /// Sets input `name` (one number per element) from now on: it holds
+    /// until set again. The outputs at the present time are recomputed
+    /// with it before anything reads them ([`Simulator::output`],
+    /// [`Simulator::signal`]) or the run moves on ([`Simulator::advance_to`]),
+    /// so a host can set a measurement and read the command it gives at
+    /// the same instant.
+    pub fn set_input(&mut self, name: &str, value: &[f64]) -> Result<(), Diagnostic> {
+        let Some(&(_, block)) = self.model.external_inputs.iter().find(|(n, _)| n == name) else {
+            return Err(Diagnostic::plain(format!("no input `{name}`")).suggest(name, self.input_names()).or_hint(
+                if self.model.external_inputs.is_empty() {
+                    "the graph has no inputs: add a top-level `inport` block".to_string()
+                } else {
+                    format!("inputs: {}", self.input_names().collect::<Vec<_>>().join(", "))
+                },
+            ));
+        };
+        let held = self.model.blocks[block].external_input().expect("an external input block");
+        if held.len() != value.len() {
+            return Err(Diagnostic::plain(format!(
+                "input `{name}` has {} element(s), given {}",
+                held.len(),
+                value.len()
+            )));
+        }
+        if let Some(bad) = value.iter().find(|v| !v.is_finite()) {
+            return Err(Diagnostic::plain(format!("input `{name}`: {bad} is not a finite number")));
+        }
+        held.copy_from_slice(value);
+        self.inputs_changed = true;
+        Ok(())
+    }
+
+    /// Simulates up to time `t` and stops exactly there (outputs computed
+    /// at `t`). `t` may lie beyond the graph's stop time, which then moves
+    /// to `t`; a time before the present is an error.
+    pub fn advance_to(&mut self, t: f64) -> Result<(), SimError> {
+        if !t.is_finite() || t < self.t - self.tol {
+            return Err(SimError::Host(format!("cannot advance to t = {t} from t = {}", self.t)));
+        }
+        self.stop = self.stop.max(t);
+        self.refresh()?;
+        self.pause = t;
+        let result = self.advance_to_pause(t);
+        self.pause = f64::INFINITY;
+        result
+    }
+
+    /// Computes the outputs at the present time if nothing has yet, or an
+    /// input changed since.
+    fn refresh(&mut self) -> Result<(), SimError> {
+        if self.first || self.inputs_changed {
+            self.outputs()?;
+        }
+        Ok(())
+    }
+
+    fn advance_to_pause(&mut self, t: f64) -> Result<(), SimError> {
+        while self.t < t - self.tol {
+            self.advance()?;
+            self.outputs()?;
+        }
+        Ok(())
+    }
+
+    /// The present value of output `name` (a top-level `outport`).
+    pub fn output(&mut self, name: &str) -> Result<&[f64], Diagnostic> {
+        self.refresh().map_err(|e| Diagnostic::plain(e.to_string()))?;
+        let Some((_, port)) = self.model.external_outputs.iter().find(|(n, _)| n == name) else {
+            return Err(Diagnostic::plain(format!("no output `{name}`"))
+                .suggest(name, self.output_names())
+                .or_hint("the graph's outputs are its top-level `outport` blocks"));
+        };
+        Ok(&self.signals[port.offset..port.offset + port.width])
+    }
+
+    /// The present value of any signal: a recorded name, `block`,
+    /// `block.port`, `sub.port` of a subsystem, with `[k]` for one element.
+    pub fn signal(&mut self, name: &str) -> Result<&[f64], Diagnostic> {
+        self.refresh().map_err(|e| Diagnostic::plain(e.to_string()))?;
+        if let Some(c) = self.model.columns.iter().find(|c| c.name == name) {
+            return Ok(&self.signals[c.offset..c.offset + c.width]);
+        }
+        if let Some((_, port)) = self.model.external_outputs.iter().find(|(n, _)| n == name) {
+            return Ok(&self.signals[port.offset..port.offset + port.width]);
+        }
+        let port = self.model.signal_port(name)?;
+        Ok(&self.signals[port.offset..port.offset + port.width])
+    }
+
+    /// The run as it stands, to return to later ([`Simulator::restore`]).
+    /// Copies every block, so take it at the moments to come back to
+    /// rather than at every step.
+    pub fn state(&self) -> Snapshot {
+        Snapshot {
+            owner: self.id,
+            blocks: self.model.blocks.clone(),
+            frozen: self.model.slots.iter().map(|s| s.frozen).collect(),
+            signals: self.signals.clone(),
+            x: self.x.clone(),
+            integ: self.integ.clone(),
+            clocks: self.clocks.clone(),
+            grid: self.grid,
+            t: self.t,
+            stop: self.stop,
+            first: self.first,
+            next_event: self.next_event,
+            major_steps: self.major_steps,
+            stalled: self.stalled,
+            watch: self.watch.clone(),
+            held: self.held.clone(),
+            at_event: self.at_event,
+            inputs_changed: self.inputs_changed,
+        }
+    }
+
+    /// Returns the run to `snapshot`, taken of this simulator.
+    pub fn restore(&mut self, snapshot: &Snapshot) -> Result<(), Diagnostic> {
+        if snapshot.owner != self.id {
+            return Err(Diagnostic::plain("the snapshot was taken of another simulator")
+                .with_hint("restore a snapshot into the simulator whose `state()` made it"));
+        }
+        let s = snapshot.clone();
+        self.model.blocks = s.blocks;
+        for (slot, frozen) in self.model.slots.iter_mut().zip(s.frozen) {
+            slot.frozen = frozen;
+        }
+        (self.signals, self.x, self.integ, self.clocks, self.grid) = (s.signals, s.x, s.integ, s.clocks, s.grid);
+        (self.t, self.stop, self.first, self.next_event) = (s.t, s.stop, s.first, s.next_event);
+        (self.major_steps, self.stalled, self.watch, self.held) = (s.major_steps, s.stalled, s.watch, s.held);
+        (self.at_event, self.inputs_changed) = (s.at_event, s.inputs_changed);
+        Ok(())
+    }
+}
