@@ -10,8 +10,10 @@
 //! block's mode must change (module `events`). After `initialize`, stepping
 //! allocates nothing.
 
+mod error;
 mod events;
 mod host;
+pub use error::SimError;
 pub use host::Snapshot;
 
 use crate::block::{Io, Port};
@@ -19,67 +21,6 @@ use crate::compile::{Between, Model, Rate, Slot};
 use ctlgraph_solver::{Integrator, Method, OdeSystem, SolverError, Stats, Zoh};
 pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
-use std::fmt;
-
-/// Why a run stopped early.
-#[derive(Clone, Debug, PartialEq)]
-pub enum SimError {
-    /// A signal or state became NaN or infinite; `inputs` are the block's
-    /// input values at that moment (vector elements as `u[k]`).
-    NonFinite { t: f64, block: String, what: String, value: f64, inputs: Vec<(String, f64)> },
-    /// The solver gave up; `culprit` is the block and state index that
-    /// forced it, when the solver can tell (the state whose error estimate
-    /// kept the step shrinking).
-    Solver { t: f64, error: SolverError, culprit: Option<(String, usize)> },
-    /// Time stopped advancing: a block asks for major steps closer together
-    /// than floating point can tell apart.
-    Stalled { t: f64, block: String },
-    /// A block's zero crossings kept firing at (nearly) one instant: the
-    /// model chatters (a Zeno or sliding behaviour).
-    Chattering { t: f64, block: String, what: String },
-    /// A program driving the run asked for something impossible (see
-    /// [`Simulator::advance_to`]).
-    Host(String),
-}
-
-impl fmt::Display for SimError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            SimError::NonFinite { t, block, what, value, inputs } => {
-                write!(f, "t = {t}: block `{block}`: {what} is {value}")?;
-                if !inputs.is_empty() {
-                    let shown: Vec<String> =
-                        inputs.iter().take(MAX_INPUTS_SHOWN).map(|(n, v)| format!("{n} = {v}")).collect();
-                    let more = inputs.len().saturating_sub(MAX_INPUTS_SHOWN);
-                    let more = if more > 0 { format!(" and {more} more") } else { String::new() };
-                    write!(f, " (inputs: {}{more})", shown.join(", "))?;
-                }
-                Ok(())
-            }
-            SimError::Solver { t, error, culprit: None } => write!(f, "t = {t}: solver: {error}"),
-            SimError::Solver { t, error, culprit: Some((block, k)) } => {
-                write!(f, "t = {t}: solver: {error}; the step is forced down by block `{block}` (state {k})")
-            }
-            SimError::Stalled { t, block } => write!(
-                f,
-                "t = {t}: time does not advance: block `{block}` asks for steps closer than the time resolution \
-                 (a period or event spacing too small for the stop time)"
-            ),
-            SimError::Chattering { t, block, what } => write!(
-                f,
-                "t = {t}: block `{block}` chatters: {what}; \
-                 hint: `solver: {{ zero_crossing: adaptive }}` ignores a chattering block's crossings, \
-                 or reformulate (add hysteresis, a boundary layer)"
-            ),
-            SimError::Host(message) => f.write_str(message),
-        }
-    }
-}
-
-impl std::error::Error for SimError {}
-
-/// Input values a non-finite message lists (a wide vector input is cut short).
-const MAX_INPUTS_SHOWN: usize = 8;
 
 /// The times k·h of a grid with step h. When h is the reciprocal of a
 /// whole number n (0.01, 1e-4, 0.5), k/n is used: division is correctly
