@@ -1,0 +1,408 @@
+//! ctlgraph's Python extension (`ctlgraph._native`): runs graph files and
+//! drives compiled graphs step by step, at Rust speed, with numpy arrays
+//! back. The package `ctlgraph` (ctlgraph/__init__.py) re-exports it.
+
+use ctlgraph::core::checks::CheckResult;
+use ctlgraph::core::trace::{Recorder, Trace};
+use ctlgraph::core::{Diagnostic, Model, Simulator, Snapshot as CoreSnapshot};
+use numpy::{PyArray1, PyUntypedArrayMethods};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyKeyError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
+
+create_exception!(
+    ctlgraph,
+    GraphError,
+    PyException,
+    "A graph file is invalid. Attributes: message, file, line, column (1-based; None when the error has no \
+     position) and hint (None when there is none). str() gives `file:line:col: message` as the CLI prints it."
+);
+create_exception!(
+    ctlgraph,
+    SimulationError,
+    PyException,
+    "A run stopped early: a signal became NaN or infinite, the solver gave up, time stopped advancing, or a \
+     step-by-step call asked for the impossible."
+);
+
+/// A `Diagnostic` as a `GraphError` with its position and hint as attributes.
+fn graph_error(py: Python<'_>, d: &Diagnostic) -> PyErr {
+    let err = GraphError::new_err(d.to_string());
+    let value = err.value(py);
+    let pos = d.pos.as_ref();
+    let file = pos.map(|p| p.file.to_string()).or_else(|| d.file.as_ref().map(|f| f.to_string()));
+    let set = |name: &str, v: Py<PyAny>| value.setattr(name, v);
+    let attrs = (|| -> PyResult<()> {
+        set("message", d.message.clone().into_pyobject(py)?.into_any().unbind())?;
+        set("file", file.into_pyobject(py)?.into_any().unbind())?;
+        set("line", pos.map(|p| p.line).into_pyobject(py)?.into_any().unbind())?;
+        set("column", pos.map(|p| p.col).into_pyobject(py)?.into_any().unbind())?;
+        set("hint", d.hint.clone().into_pyobject(py)?.into_any().unbind())
+    })();
+    match attrs {
+        Ok(()) => err,
+        Err(e) => e,
+    }
+}
+
+/// `set={"kp": 3.0}` as the loader's overrides (values may be numbers or
+/// expressions over the graph's parameters, as with `--set`).
+fn overrides(set: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String)>> {
+    let Some(set) = set else { return Ok(Vec::new()) };
+    set.iter()
+        .map(|(k, v)| {
+            let name: String = k.extract()?;
+            let value = match v.extract::<f64>() {
+                Ok(x) => format!("{x:e}"),
+                Err(_) => v.extract::<String>().map_err(|_| {
+                    PyValueError::new_err(format!("set[{name:?}]: give a number or an expression string"))
+                })?,
+            };
+            Ok((name, value))
+        })
+        .collect()
+}
+
+fn compile(path: &Path, sets: &[(String, String)], seed: Option<u64>) -> Result<Model, Diagnostic> {
+    ctlgraph::compile_file_seeded(path, sets, seed)
+}
+
+/// One check of a graph, evaluated on a run.
+#[pyclass(frozen, get_all, module = "ctlgraph")]
+struct Check {
+    /// The check's name (its text when unnamed).
+    name: String,
+    /// The value of its expression on the run.
+    measured: f64,
+    /// "<", "<=", ">" or ">=".
+    op: &'static str,
+    bound: f64,
+    passed: bool,
+}
+
+#[pymethods]
+impl Check {
+    fn __repr__(&self) -> String {
+        let verdict = if self.passed { "pass" } else { "FAIL" };
+        format!("Check({verdict} {:?}: measured {} {} {})", self.name, self.measured, self.op, self.bound)
+    }
+}
+
+impl From<&CheckResult> for Check {
+    fn from(c: &CheckResult) -> Self {
+        Check { name: c.name.clone(), measured: c.measured, op: c.op.symbol(), bound: c.bound, passed: c.passed }
+    }
+}
+
+/// The recorded signals of a run (numpy arrays, one per recorded column),
+/// its checks and its statistics.
+///
+/// `result.t` is the time column; `result["y"]` a recorded signal (vector
+/// signals as `"name[1]"` …); `result.names` lists them; `result.checks`
+/// the graph's checks as `Check` objects (name, measured, op, bound,
+/// passed); `result.stats` a dict (major_steps, solver_steps, rejected,
+/// evaluations, events, wall_seconds); `result.to_pandas()` a DataFrame
+/// indexed by t, when pandas is installed.
+#[pyclass(frozen, name = "Result", module = "ctlgraph")]
+struct RunResult {
+    names: Vec<String>,
+    columns: Vec<Py<PyArray1<f64>>>,
+    #[pyo3(get)]
+    checks: Vec<Py<Check>>,
+    #[pyo3(get)]
+    stats: Py<PyDict>,
+}
+
+#[pymethods]
+impl RunResult {
+    /// The time column [s].
+    #[getter]
+    fn t(&self, py: Python<'_>) -> Py<PyArray1<f64>> {
+        self.columns[0].clone_ref(py)
+    }
+
+    /// The recorded names, in the CSV's column order (without `t`).
+    #[getter]
+    fn names(&self) -> Vec<String> {
+        self.names[1..].to_vec()
+    }
+
+    fn __getitem__(&self, py: Python<'_>, name: &str) -> PyResult<Py<PyArray1<f64>>> {
+        match self.names.iter().position(|n| n == name) {
+            Some(k) => Ok(self.columns[k].clone_ref(py)),
+            None => Err(PyKeyError::new_err(format!("{name:?} is not recorded; recorded: {}", self.names.join(", ")))),
+        }
+    }
+
+    fn __contains__(&self, name: &str) -> bool {
+        self.names.iter().any(|n| n == name)
+    }
+
+    fn __len__(&self) -> usize {
+        self.names.len() - 1
+    }
+
+    /// Whether every check passed (True for a graph without checks).
+    #[getter]
+    fn passed(&self, py: Python<'_>) -> bool {
+        self.checks.iter().all(|c| c.bind(py).get().passed)
+    }
+
+    /// The recorded signals as a pandas DataFrame indexed by t (needs
+    /// pandas; the arrays are shared, not copied, where pandas allows).
+    fn to_pandas(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        let pandas = py.import("pandas").map_err(|e| {
+            pyo3::exceptions::PyImportError::new_err(format!("to_pandas needs pandas (pip install pandas): {e}"))
+        })?;
+        let data = PyDict::new(py);
+        for (name, column) in self.names.iter().zip(&self.columns).skip(1) {
+            data.set_item(name, column.clone_ref(py))?;
+        }
+        let index = pandas.call_method1("Index", (self.columns[0].clone_ref(py), py.None(), false, "t"))?;
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("index", index)?;
+        Ok(pandas.getattr("DataFrame")?.call((data,), Some(&kwargs))?.unbind())
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let samples = self.columns[0].bind(py).len();
+        format!("Result({} samples of {})", samples, self.names[1..].join(", "))
+    }
+}
+
+/// Runs `model` to its stop time (or `stop`), recording as the CLI does.
+fn simulate(model: Model, stop: Option<f64>) -> std::result::Result<(Trace, Vec<CheckResult>, [u64; 5], f64), String> {
+    let start = std::time::Instant::now();
+    let checks = model.checks.clone();
+    let mut sim = Simulator::new(model, stop);
+    let mut recorder = Recorder::new(sim.model());
+    let mut trace = Trace::new(sim.model().headers());
+    trace.loop_figures = sim.model().loop_figures.clone();
+    sim.run(&mut |t, signals| recorder.sample(t, signals, &mut |row| trace.push(row))).map_err(|e| e.to_string())?;
+    recorder.flush(&mut |row| trace.push(row));
+    let results = checks.iter().map(|c| trace.check(c)).collect();
+    let s = sim.stats();
+    let counts = [s.major_steps, s.solver.steps, s.solver.rejected, s.solver.evaluations, s.events];
+    Ok((trace, results, counts, start.elapsed().as_secs_f64()))
+}
+
+/// Runs the graph file `path` and returns its recorded signals.
+///
+///     result = ctlgraph.run("graphs/tutorial/pid_loop.yaml", set={"kp": 3.0})
+///     result.t, result["y"], result.checks, result.stats
+///
+/// `set` overrides graph parameters (numbers, or expressions over the
+/// graph's parameters as strings), `stop` the stop time [s], `seed` the
+/// noise seed. The numbers are the CLI's (`ctlgraph run … --out`), bit for
+/// bit. The GIL is released while the graph runs, so threads can run
+/// graphs in parallel. Raises GraphError for an invalid file and
+/// SimulationError when the run stops early.
+#[pyfunction]
+#[pyo3(signature = (path, set = None, stop = None, seed = None))]
+fn run(
+    py: Python<'_>,
+    path: PathBuf,
+    set: Option<&Bound<'_, PyDict>>,
+    stop: Option<f64>,
+    seed: Option<u64>,
+) -> PyResult<RunResult> {
+    let sets = overrides(set)?;
+    let model = py.detach(|| compile(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
+    let (trace, checks, counts, wall) = py.detach(|| simulate(model, stop)).map_err(SimulationError::new_err)?;
+    let Trace { headers, columns, .. } = trace;
+    let columns = columns.into_iter().map(|c| PyArray1::from_vec(py, c).unbind()).collect();
+    let checks = checks.iter().map(|c| Py::new(py, Check::from(c))).collect::<PyResult<_>>()?;
+    let stats = PyDict::new(py);
+    for (name, v) in ["major_steps", "solver_steps", "rejected", "evaluations", "events"].iter().zip(counts) {
+        stats.set_item(name, v)?;
+    }
+    stats.set_item("wall_seconds", wall)?;
+    Ok(RunResult { names: headers, columns, checks, stats: stats.unbind() })
+}
+
+/// Validates the graph file `path` and returns its blocks in execution
+/// order, as dicts (name, type, sample_time). Raises GraphError.
+#[pyfunction]
+#[pyo3(signature = (path, set = None))]
+fn check(py: Python<'_>, path: PathBuf, set: Option<&Bound<'_, PyDict>>) -> PyResult<Py<PyList>> {
+    let sets = overrides(set)?;
+    let model = py.detach(|| compile(&path, &sets, None)).map_err(|d| graph_error(py, &d))?;
+    blocks_of(py, &model)
+}
+
+fn blocks_of(py: Python<'_>, model: &Model) -> PyResult<Py<PyList>> {
+    let list = PyList::empty(py);
+    for m in &model.meta {
+        let d = PyDict::new(py);
+        d.set_item("name", &m.name)?;
+        d.set_item("type", &m.type_name)?;
+        d.set_item("sample_time", m.sample_time.to_string())?;
+        list.append(d)?;
+    }
+    Ok(list.unbind())
+}
+
+/// A compiled graph driven step by step: `set_input`, `advance_to`,
+/// `output`, `signal`; `state()` and `restore()` to save and rewind.
+///
+///     model = ctlgraph.load("graphs/tutorial/controller_io.yaml")
+///     model.set_input("y", 0.2)
+///     u = model.output("u")
+///     model.advance_to(0.001)
+///
+/// Inputs are the graph's top-level `inport` blocks, outputs its top-level
+/// `outport` blocks; both are scalars (float) or vectors (numpy array).
+#[pyclass(frozen, name = "Model", module = "ctlgraph")]
+struct LoadedModel {
+    sim: Mutex<Simulator>,
+}
+
+/// A saved instant of a run, for `LoadedModel.restore`.
+#[pyclass(frozen, module = "ctlgraph")]
+struct Snapshot {
+    inner: Mutex<CoreSnapshot>,
+    time: f64,
+}
+
+#[pymethods]
+impl Snapshot {
+    /// The time it was taken at [s].
+    #[getter]
+    fn time(&self) -> f64 {
+        self.time
+    }
+}
+
+/// A signal value for Python: a float for a scalar, an array for a vector.
+fn value(py: Python<'_>, v: &[f64]) -> PyResult<Py<PyAny>> {
+    Ok(match v {
+        [x] => x.into_pyobject(py)?.into_any().unbind(),
+        _ => PyArray1::from_slice(py, v).into_any().unbind(),
+    })
+}
+
+impl LoadedModel {
+    /// The simulator (a call that panicked left it usable: the lock is
+    /// taken back).
+    fn sim(&self) -> MutexGuard<'_, Simulator> {
+        self.sim.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+#[pymethods]
+impl LoadedModel {
+    /// The present time [s].
+    #[getter]
+    fn time(&self) -> f64 {
+        self.sim().time()
+    }
+
+    /// The graph's inputs (top-level inport blocks).
+    #[getter]
+    fn inputs(&self) -> Vec<String> {
+        self.sim().input_names().map(str::to_string).collect()
+    }
+
+    /// The graph's outputs (top-level outport blocks).
+    #[getter]
+    fn outputs(&self) -> Vec<String> {
+        self.sim().output_names().map(str::to_string).collect()
+    }
+
+    /// Sets input `name` to `value` (a float, or a sequence for a vector
+    /// input) from now on; it holds until set again.
+    fn set_input(&self, py: Python<'_>, name: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let v: Vec<f64> = match value.extract::<f64>() {
+            Ok(x) => vec![x],
+            Err(_) => value.extract()?,
+        };
+        self.sim().set_input(name, &v).map_err(|d| graph_error(py, &d))
+    }
+
+    /// Simulates up to time `t` [s], landing exactly there (the GIL is
+    /// released meanwhile).
+    fn advance_to(&self, py: Python<'_>, t: f64) -> PyResult<()> {
+        let sim = &self.sim;
+        py.detach(|| sim.lock().unwrap_or_else(|e| e.into_inner()).advance_to(t))
+            .map_err(|e| SimulationError::new_err(e.to_string()))
+    }
+
+    /// The present value of output `name`: a float, or an array.
+    fn output(&self, py: Python<'_>, name: &str) -> PyResult<Py<PyAny>> {
+        match self.sim().output(name) {
+            Ok(v) => value(py, v),
+            Err(d) => Err(graph_error(py, &d)),
+        }
+    }
+
+    /// The present value of any signal: a recorded name, `block`,
+    /// `block.port`, `sub.port`, with `[k]` for one element.
+    fn signal(&self, py: Python<'_>, name: &str) -> PyResult<Py<PyAny>> {
+        match self.sim().signal(name) {
+            Ok(v) => value(py, v),
+            Err(d) => Err(graph_error(py, &d)),
+        }
+    }
+
+    /// The blocks in execution order, as dicts (name, type, sample_time).
+    fn blocks(&self, py: Python<'_>) -> PyResult<Py<PyList>> {
+        blocks_of(py, self.sim().model())
+    }
+
+    /// The recorded signal names, then the graph's outputs not among them.
+    fn signals(&self) -> Vec<String> {
+        let sim = self.sim();
+        let mut names: Vec<String> = sim.model().columns.iter().map(|c| c.name.clone()).collect();
+        for output in sim.output_names() {
+            if !names.iter().any(|n| n == output) {
+                names.push(output.to_string());
+            }
+        }
+        names
+    }
+
+    /// The run as it stands: states, block memory, solver.
+    fn state(&self) -> Snapshot {
+        let sim = self.sim();
+        Snapshot { inner: Mutex::new(sim.state()), time: sim.time() }
+    }
+
+    /// Returns the run to `snapshot` (taken of this model).
+    fn restore(&self, py: Python<'_>, snapshot: &Snapshot) -> PyResult<()> {
+        let saved = snapshot.inner.lock().unwrap_or_else(|e| e.into_inner());
+        self.sim().restore(&saved).map_err(|d| graph_error(py, &d))
+    }
+
+    fn __repr__(&self) -> String {
+        format!("Model(t = {}, inputs {:?}, outputs {:?})", self.time(), self.inputs(), self.outputs())
+    }
+}
+
+/// Compiles the graph file `path` for stepping; see `LoadedModel`.
+/// `set` and `seed` as for `run`. Raises GraphError.
+#[pyfunction]
+#[pyo3(signature = (path, set = None, seed = None))]
+fn load(py: Python<'_>, path: PathBuf, set: Option<&Bound<'_, PyDict>>, seed: Option<u64>) -> PyResult<LoadedModel> {
+    let sets = overrides(set)?;
+    let model = py.detach(|| compile(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
+    Ok(LoadedModel { sim: Mutex::new(Simulator::new(model, None)) })
+}
+
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("GraphError", py.get_type::<GraphError>())?;
+    m.add("SimulationError", py.get_type::<SimulationError>())?;
+    m.add_class::<RunResult>()?;
+    m.add_class::<Check>()?;
+    m.add_class::<LoadedModel>()?;
+    m.add_class::<Snapshot>()?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(load, m)?)?;
+    m.add_function(wrap_pyfunction!(check, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
