@@ -11,6 +11,9 @@ simulated at Rust speed.
     model.advance_to(0.001)        # lands exactly there
     u = model.output("u")          # its top-level outport
 
+    ctlgraph.linearize(path, open="ctrl.u")          # A, B, C, D, poles, margins
+    ctlgraph.sweep(path, vary={"kp": "1..4:20"})      # the sweep table as columns
+
 Errors in a graph file raise GraphError (with file, line, column, hint);
 a run that stops early raises SimulationError.
 """
@@ -24,8 +27,10 @@ from ._native import (
     Snapshot,
     __version__,
     check,
+    linearize,
     load,
     run,
+    sweep,
 )
 
 __all__ = [
@@ -37,6 +42,8 @@ __all__ = [
     "Snapshot",
     "__version__",
     "check",
+    "linearize",
     "load",
     "run",
+    "sweep",
 ]

@@ -5,7 +5,7 @@
 use ctlgraph::core::checks::CheckResult;
 use ctlgraph::core::trace::{Recorder, Trace};
 use ctlgraph::core::{Diagnostic, Model, Simulator, Snapshot as CoreSnapshot};
-use numpy::{PyArray1, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyKeyError, PyValueError};
 use pyo3::prelude::*;
@@ -391,6 +391,150 @@ fn load(py: Python<'_>, path: PathBuf, set: Option<&Bound<'_, PyDict>>, seed: Op
     Ok(LoadedModel { sim: Mutex::new(Simulator::new(model, None)) })
 }
 
+/// The linear model of a graph around an operating point, as
+/// `ctlgraph linearize` computes it: a dict with A, B, C, D (numpy 2-D
+/// arrays), states (names), sample_time (None: continuous), input, output,
+/// loop_transfer, at, poles (complex) and, for a loop transfer (`open`),
+/// margins (gain_margin, phase_margin [deg], gain_crossover_freq,
+/// delay_margin [s], peak_sensitivity, …).
+///
+///     lin = ctlgraph.linearize("graphs/tutorial/pid_loop.yaml", open="ctrl.u")
+///     lin["margins"]["phase_margin"]
+///
+/// `input`/`output`/`open` name signals (`block`, `block.port`, `name[k]`);
+/// left out, the file's `analysis:` section decides. Raises GraphError.
+#[pyfunction]
+#[pyo3(signature = (path, input = None, output = None, open = None, at = 0.0, set = None))]
+fn linearize(
+    py: Python<'_>,
+    path: PathBuf,
+    input: Option<String>,
+    output: Option<String>,
+    open: Option<String>,
+    at: f64,
+    set: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Py<PyDict>> {
+    use ctlgraph::core::linearize::{AnalysisError, Selection};
+    let sets = overrides(set)?;
+    let sel = Selection { input, output, open, at, pos: None };
+    let lin = py.detach(|| ctlgraph::analysis::linearize_file(&path, &sets, &sel)).map_err(|e| match e {
+        AnalysisError::Invalid(d) => graph_error(py, &d),
+        AnalysisError::Run(e) => SimulationError::new_err(format!("reaching the operating point: {e}")),
+    })?;
+    let ss = &lin.system;
+    let matrix = |v: &[f64], rows: usize, cols: usize| -> PyResult<Py<PyAny>> {
+        Ok(PyArray1::from_slice(py, v).reshape([rows, cols])?.into_any().unbind())
+    };
+    let d = PyDict::new(py);
+    d.set_item("A", matrix(&ss.a, ss.n, ss.n)?)?;
+    d.set_item("B", matrix(&ss.b, ss.n, ss.m)?)?;
+    d.set_item("C", matrix(&ss.c, ss.p, ss.n)?)?;
+    d.set_item("D", matrix(&ss.d, ss.p, ss.m)?)?;
+    d.set_item("states", &lin.states)?;
+    d.set_item("sample_time", lin.sample_time)?;
+    d.set_item("input", &lin.input)?;
+    d.set_item("output", &lin.output)?;
+    d.set_item("loop_transfer", lin.loop_transfer)?;
+    d.set_item("at", lin.at)?;
+    let poles = ctlgraph::solver::freq::poles(ss).unwrap_or_default();
+    let poles: Vec<_> = poles.iter().map(|p| pyo3::types::PyComplex::from_doubles(py, p.re, p.im)).collect();
+    d.set_item("poles", poles)?;
+    if lin.loop_transfer {
+        let m = ctlgraph::analysis::figures(&lin).margins;
+        let margins = PyDict::new(py);
+        for (name, v) in [
+            ("gain_margin", m.gain_margin),
+            ("gain_crossover_phase_freq", m.gain_crossover_phase_freq),
+            ("phase_margin", m.phase_margin),
+            ("gain_crossover_freq", m.gain_crossover_freq),
+            ("delay_margin", m.delay_margin),
+            ("peak_sensitivity", m.peak_sensitivity),
+            ("peak_sensitivity_freq", m.peak_sensitivity_freq),
+        ] {
+            margins.set_item(name, v)?;
+        }
+        d.set_item("margins", margins)?;
+    }
+    Ok(d.unbind())
+}
+
+/// Runs a designed set of cases of a graph in parallel, as `ctlgraph
+/// sweep`, and returns its table as a dict of columns: `case`, each varied
+/// parameter (numpy arrays), `seed`, each check's measured value (an
+/// array, NaN where the case failed) and `"<check> passed"` (bools),
+/// `status` ("ok", "checks failed", "failed") and `error`.
+///
+///     table = ctlgraph.sweep("graphs/tutorial/pid_loop.yaml",
+///                            vary={"kp": "1..4:20", "kd": [0.0, 0.1, 0.2]})
+///
+/// `vary` maps a parameter to a list of values, `"LO..HI:N"` (a grid) or
+/// `"LO..HI"` (with `random=N` draws); `seeds=(A, B)` runs every case
+/// with each seed A..B; `seed` seeds the draws; `jobs` threads (default:
+/// all cores; the GIL is released). Raises GraphError.
+#[pyfunction]
+#[pyo3(signature = (path, vary, random = None, seeds = None, seed = 0, jobs = None))]
+fn sweep(
+    py: Python<'_>,
+    path: PathBuf,
+    vary: &Bound<'_, PyDict>,
+    random: Option<usize>,
+    seeds: Option<(u64, u64)>,
+    seed: u64,
+    jobs: Option<usize>,
+) -> PyResult<Py<PyDict>> {
+    use ctlgraph::sweep::{Keep, SweepSpec, Vary};
+    let mut varied = Vec::new();
+    for (k, v) in vary.iter() {
+        let name: String = k.extract()?;
+        let spec = match v.extract::<String>() {
+            Ok(text) => format!("{name}={text}"),
+            Err(_) => {
+                let values: Vec<f64> = v.extract().map_err(|_| {
+                    PyValueError::new_err(format!("vary[{name:?}]: a list of numbers, \"LO..HI:N\" or \"LO..HI\""))
+                })?;
+                format!("{name}={}", values.iter().map(|x| format!("{x:e}")).collect::<Vec<_>>().join(","))
+            }
+        };
+        varied.push(Vary::parse(&spec).map_err(|d| graph_error(py, &d))?);
+    }
+    let names: Vec<String> = varied.iter().map(|v| v.name().to_string()).collect();
+    let spec = SweepSpec { vary: varied, random, seeds, draw_seed: seed, shard: None };
+    let cases = ctlgraph::sweep::cases(&spec).map_err(|d| graph_error(py, &d))?;
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| graph_error(py, &Diagnostic::in_file(&path.display().to_string(), format!("cannot read: {e}"))))?;
+    let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let keep = Keep { traces_dir: None, in_memory: &|_| false };
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let rows =
+        py.detach(|| ctlgraph::sweep::run(&text, &path, &names, &cases, jobs, &keep, &stop, &|| {})).map_err(|e| {
+            match e {
+                ctlgraph::suite::Failure::Invalid(d) => graph_error(py, &d),
+                other => SimulationError::new_err(other.to_string()),
+            }
+        })?;
+    let table = PyDict::new(py);
+    table.set_item("case", PyArray1::from_vec(py, rows.iter().map(|r| r.case.index as u64).collect()))?;
+    for (k, name) in names.iter().enumerate() {
+        table.set_item(name, PyArray1::from_vec(py, rows.iter().map(|r| r.case.values[k]).collect()))?;
+    }
+    table.set_item("seed", rows.iter().map(|r| r.case.seed).collect::<Vec<_>>())?;
+    let checks: Vec<String> = rows
+        .iter()
+        .find_map(|r| r.result.as_ref().ok())
+        .map(|checks| checks.iter().map(|c| c.name.clone()).collect())
+        .unwrap_or_default();
+    for (k, name) in checks.iter().enumerate() {
+        let measured = rows.iter().map(|r| r.result.as_ref().map_or(f64::NAN, |c| c[k].measured)).collect();
+        let passed: Vec<bool> = rows.iter().map(|r| r.result.as_ref().is_ok_and(|c| c[k].passed)).collect();
+        table.set_item(name, PyArray1::from_vec(py, measured))?;
+        table.set_item(format!("{name} passed"), passed)?;
+    }
+    table.set_item("status", rows.iter().map(|r| r.status()).collect::<Vec<_>>())?;
+    let errors: Vec<Option<&str>> = rows.iter().map(|r| r.result.as_ref().err().map(String::as_str)).collect();
+    table.set_item("error", errors)?;
+    Ok(table.unbind())
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
@@ -403,6 +547,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(check, m)?)?;
+    m.add_function(wrap_pyfunction!(linearize, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

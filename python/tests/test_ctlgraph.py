@@ -6,6 +6,7 @@ CLI binary is $CTLGRAPH_BIN, or target/debug/ctlgraph.
 """
 
 import csv
+import json
 import os
 import subprocess
 import sys
@@ -163,3 +164,34 @@ def test_the_readmes_python_snippet_prints_what_it_shows():
         [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True
     ).stdout.splitlines()
     assert printed == expected
+
+
+def test_linearize_is_the_clis(tmp_path):
+    out = tmp_path / "lin.json"
+    args = [str(CLI), "linearize", graph("tutorial/pid_loop.yaml"), "--open", "ctrl.u", "--out", str(out)]
+    subprocess.run(args, check=True, capture_output=True)
+    expected = json.loads(out.read_text())
+    lin = ctlgraph.linearize(graph("tutorial/pid_loop.yaml"), open="ctrl.u")
+    for name in "ABCD":
+        assert np.array_equal(lin[name], np.array(expected[name.lower()])), name
+    assert lin["states"] == expected["states"] and lin["loop_transfer"]
+    poles = sorted((p.real, p.imag) for p in lin["poles"])
+    assert poles == sorted((p["re"], p["im"]) for p in expected["poles"])
+    assert 0 < lin["margins"]["phase_margin"] < 90
+    with pytest.raises(ctlgraph.GraphError, match="no block `nope`"):
+        ctlgraph.linearize(graph("tutorial/pid_loop.yaml"), open="nope")
+
+
+def test_sweep_is_the_clis(tmp_path):
+    out = tmp_path / "sweep.csv"
+    args = ["sweep", graph("tutorial/pid_loop.yaml"), "--vary", "kp=1..4:4", "--vary", "kd=0,0.1", "--out", str(out)]
+    done = subprocess.run([str(CLI), *args], capture_output=True)
+    assert done.returncode in (0, 1), done.stderr
+    with open(out, newline="") as f:
+        rows = list(csv.DictReader(f))
+    table = ctlgraph.sweep(graph("tutorial/pid_loop.yaml"), vary={"kp": "1..4:4", "kd": [0.0, 0.1]}, jobs=2)
+    assert list(table["kp"]) == [float(r["kp"]) for r in rows]
+    assert list(table["kd"]) == [float(r["kd"]) for r in rows]
+    assert table["status"] == [r["status"] for r in rows]
+    assert np.array_equal(table["steady"], [float(r["steady"]) for r in rows])
+    assert table["steady passed"] == [r["steady passed"] == "true" for r in rows]
