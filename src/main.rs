@@ -238,11 +238,22 @@ fn check(graph: &Path, sets: &[String]) -> Result<(), Failure> {
         flat.blocks.iter().filter(|b| b.spec.type_name == ty && !b.path.contains('/')).map(|b| b.path.clone()).collect()
     };
     let (inports, outports) = (ports("inport"), ports("outport"));
-    if !inports.is_empty() || !outports.is_empty() {
-        return check_subsystem(graph, &inports, &outports);
-    }
-    let model = ctlgraph_core::compile(&flat, &ctlgraph::registry())?;
+    // A file with ports runs on its own (they are then its inputs and
+    // outputs, for a program driving it) or is a subsystem: when it does
+    // not compile alone, check it as one.
+    let model = match ctlgraph_core::compile(&flat, &ctlgraph::registry()) {
+        Ok(model) => model,
+        Err(_) if !inports.is_empty() || !outports.is_empty() => {
+            return check_subsystem(graph, &inports, &outports);
+        }
+        Err(d) => return Err(d.into()),
+    };
     println!("{}: ok", graph.display());
+    if !inports.is_empty() || !outports.is_empty() {
+        let list = |names: &[String]| if names.is_empty() { "(none)".to_string() } else { names.join(", ") };
+        println!("inputs:  {} (set by a program driving the graph; a subsystem's inports)", list(&inports));
+        println!("outputs: {}", list(&outports));
+    }
     for c in &model.checks {
         if let Some(problem) = c.window_problem(model.sim.stop) {
             println!("  warning: check `{}`: {problem}: it will be skipped", c.name);
