@@ -209,3 +209,25 @@ proptest::proptest! {
         proptest::prop_assert!(same, "cuts {:?}", cuts);
     }
 }
+
+#[test]
+fn a_subsystems_ports_are_signals_by_name() {
+    // `soft.y` is the signal wired to the inport y, `soft.u` the outport.
+    let mut sim = simulator("graphs/tutorial/subsystem.yaml");
+    sim.advance_to(1.0).unwrap();
+    let plant = sim.signal("plant_soft").unwrap().to_vec();
+    assert_eq!(sim.signal("soft.y").unwrap(), plant.as_slice());
+    assert_eq!(sim.signal("soft.r").unwrap(), [1.0]);
+    let recorded = sim.signal("u_soft").unwrap().to_vec();
+    assert_eq!(sim.signal("soft.u").unwrap(), recorded.as_slice());
+    // The same names select signals for linearisation: from the
+    // controller's measurement input to its output.
+    let model = ctlgraph::compile_file(Path::new("graphs/tutorial/subsystem.yaml"), &[]).unwrap();
+    let sel = ctlgraph::core::linearize::Selection {
+        input: Some("soft.y".into()),
+        output: Some("soft.u".into()),
+        ..Default::default()
+    };
+    let lin = ctlgraph::core::linearize::linearize(model, &sel).unwrap();
+    assert_eq!(lin.input, "soft.y");
+}

@@ -109,9 +109,9 @@ pub struct Model {
     /// [`crate::checks::metrics::LoopFigure`] (filled in by whoever can
     /// linearise: `ctlgraph::compile_flat`).
     pub loop_figures: Option<Vec<f64>>,
-    /// Top-level subsystem outports by name (`sub.port`, `sub`) and the
-    /// real signal each carries (for analysis selections).
-    pub subsystem_outputs: Vec<(String, Port)>,
+    /// Top-level subsystem ports by name (`sub.port`, `sub`) and the real
+    /// signal on each (for analysis selections and `Simulator::signal`).
+    pub subsystem_ports: Vec<(String, Port)>,
     /// The graph's own inputs, its top-level `inport` blocks: name and
     /// block index (see [`crate::Simulator::set_input`]).
     pub external_inputs: Vec<(String, usize)>,
@@ -224,7 +224,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         }
     }
     let columns = record_columns(g, &nodes, &index, &direct, &out_offset)?;
-    let subsystem_outputs = wiring::subsystem_outputs(g, &nodes, &index, &direct, &out_offset);
+    let subsystem_ports = wiring::subsystem_ports(g, &nodes, &index, &direct, &out_offset);
     let external_inputs = order
         .iter()
         .enumerate()
@@ -273,7 +273,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         between: Between::default(),
         analysis: g.analysis.clone(),
         loop_figures: None,
-        subsystem_outputs,
+        subsystem_ports,
         external_inputs,
         external_outputs,
     };
@@ -346,8 +346,8 @@ impl Model {
             }
             None => (name, None),
         };
-        let port = match model.subsystem_outputs.binary_search_by(|(n, _)| n.as_str().cmp(base)) {
-            Ok(k) => model.subsystem_outputs[k].1,
+        let port = match model.subsystem_ports.binary_search_by(|(n, _)| n.as_str().cmp(base)) {
+            Ok(k) => model.subsystem_ports[k].1,
             Err(_) => model.block_output(name, base)?,
         };
         match element {

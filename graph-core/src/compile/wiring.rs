@@ -212,9 +212,10 @@ pub(super) fn resolve_widths(nodes: &mut [Node], drivers: &[Vec<Driver>]) -> Res
 
 /// The columns of the output: the `record:` list, or by default every
 /// output of every top-level block.
-/// The real signal behind each top-level subsystem outport, by the names a
-/// user writes: `sub.port`, and `sub` for a subsystem with one outport.
-pub(super) fn subsystem_outputs(
+/// The real signal on each port of a top-level subsystem, by the names a
+/// user writes: `sub.port` (an inport: the signal wired to it; an outport:
+/// the signal it exports), and `sub` for a subsystem with one outport.
+pub(super) fn subsystem_ports(
     g: &FlatGraph,
     nodes: &[Node],
     index: &HashMap<&str, usize>,
@@ -222,8 +223,8 @@ pub(super) fn subsystem_outputs(
     out_offset: &[Vec<Port>],
 ) -> Vec<(String, Port)> {
     let mut named = Vec::new();
-    for (sub, (_, outs)) in g.subsystems.iter().filter(|(s, _)| !s.contains('/')) {
-        for port in outs {
+    for (sub, (ins, outs)) in g.subsystems.iter().filter(|(s, _)| !s.contains('/')) {
+        for port in ins.iter().chain(outs) {
             let Some(&(mut src)) = index.get(format!("{sub}/{port}").as_str()) else { continue };
             let mut p = 0;
             while nodes[src].is_virtual {
@@ -234,7 +235,7 @@ pub(super) fn subsystem_outputs(
                 continue;
             }
             named.push((format!("{sub}.{port}"), out_offset[src][p]));
-            if outs.len() == 1 {
+            if outs.len() == 1 && outs.contains(port) {
                 named.push((sub.clone(), out_offset[src][p]));
             }
         }
