@@ -9,6 +9,7 @@
 //! ```
 
 pub mod analysis;
+pub mod diagram;
 pub mod dot;
 pub mod plot;
 pub mod prop;

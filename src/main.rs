@@ -134,6 +134,22 @@ enum Command {
         #[arg(long = "set", value_name = "NAME=VALUE")]
         sets: Vec<String>,
     },
+    /// Draw the block diagram as SVG (no external program needed).
+    #[command(after_help = "Examples:\n  ctlgraph diagram graphs/tutorial/subsystem.yaml --svg subsystem.svg\n  \
+                      ctlgraph diagram graphs/fladrc/compare.yaml --svg compare.svg --expand")]
+    Diagram {
+        /// The graph file (YAML).
+        graph: PathBuf,
+        /// Where to write the SVG.
+        #[arg(long, value_name = "FILE.svg")]
+        svg: PathBuf,
+        /// Draw each subsystem's blocks instead of one box per subsystem.
+        #[arg(long)]
+        expand: bool,
+        /// Override a graph parameter (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        sets: Vec<String>,
+    },
     /// The linear model around an operating point: A, B, C, D with states named by block.
     #[command(after_help = "Examples:\n  ctlgraph linearize graphs/tutorial/pid_loop.yaml --open ctrl.u\n  \
                       ctlgraph linearize graphs/tutorial/pid_loop.yaml --input ctrl.u --output plant --out lin.json")]
@@ -202,6 +218,7 @@ fn main() -> ExitCode {
         Command::Bode { select, grid } => analysis_cmd::bode(select, grid),
         Command::Poles { select } => analysis_cmd::poles(select),
         Command::Dot { graph, sets } => compile(&graph, &sets).map(|m| print!("{}", ctlgraph::dot::to_dot(&m))),
+        Command::Diagram { graph, svg, expand, sets } => diagram(&graph, &svg, expand, &sets),
         Command::Blocks { markdown: true, .. } => {
             print!("{}", ctlgraph::reference::markdown(&ctlgraph::registry()));
             Ok(())
@@ -229,6 +246,17 @@ fn main() -> ExitCode {
 fn compile(graph: &Path, sets: &[String]) -> Result<Model, Failure> {
     let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
     Ok(ctlgraph::compile_file(graph, &sets)?)
+}
+
+fn diagram(graph: &Path, svg: &Path, expand: bool, sets: &[String]) -> Result<(), Failure> {
+    let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
+    let flat = ctlgraph_core::load(graph, &sets)?;
+    let model = ctlgraph_core::compile(&flat, &ctlgraph::registry())?;
+    let d = ctlgraph::diagram::build(&flat, &model, expand);
+    ctlgraph::record::write_atomic(svg, ctlgraph::diagram::to_svg(&d).as_bytes())
+        .map_err(|e| Failure::Run(format!("{}: {e}", svg.display())))?;
+    println!("{}: {} boxes, {} wires", svg.display(), d.nodes.len(), d.wires.len());
+    Ok(())
 }
 
 fn check(graph: &Path, sets: &[String]) -> Result<(), Failure> {

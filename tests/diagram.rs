@@ -1,0 +1,110 @@
+//! `ctlgraph diagram`: every bundled graph, collapsed and expanded, shows
+//! every block once, with no two boxes overlapping, and wires between
+//! the right ports.
+
+use ctlgraph::diagram::{Diagram, build, to_svg};
+use std::path::{Path, PathBuf};
+
+fn graph_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            graph_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "yaml") {
+            out.push(path);
+        }
+    }
+}
+
+fn overlapping(d: &Diagram) -> Option<(String, String)> {
+    for (i, a) in d.nodes.iter().enumerate() {
+        for b in &d.nodes[i + 1..] {
+            let apart = a.x + a.w <= b.x || b.x + b.w <= a.x || a.y + a.h <= b.y || b.y + b.h <= a.y;
+            if !apart {
+                return Some((a.name.clone(), b.name.clone()));
+            }
+        }
+    }
+    None
+}
+
+#[test]
+fn every_bundled_graph_is_drawn_whole_without_overlaps() {
+    let mut files = Vec::new();
+    graph_files(Path::new("graphs"), &mut files);
+    files.sort();
+    let mut drawn = 0;
+    for file in &files {
+        let Ok(flat) = ctlgraph::core::load(file, &[]) else { continue };
+        let Ok(model) = ctlgraph::core::compile(&flat, &ctlgraph::registry()) else { continue };
+        for expand in [false, true] {
+            let d = build(&flat, &model, expand);
+            if let Some((a, b)) = overlapping(&d) {
+                panic!("{}: boxes `{a}` and `{b}` overlap (expand: {expand})", file.display());
+            }
+            // Every block once: expanded, every block of the file; collapsed,
+            // every top-level block and subsystem.
+            let mut expected: Vec<String> = flat
+                .blocks
+                .iter()
+                .map(|b| if expand { b.path.clone() } else { b.path.split('/').next().unwrap().to_string() })
+                .collect();
+            expected.sort();
+            expected.dedup();
+            let mut names: Vec<String> = d.nodes.iter().map(|n| n.name.clone()).collect();
+            names.sort();
+            assert_eq!(names, expected, "{}", file.display());
+            let svg = to_svg(&d);
+            for n in &d.nodes {
+                assert!(svg.contains(&format!("data-name=\"{}\"", n.name)), "{}: {}", file.display(), n.name);
+            }
+            for w in &d.wires {
+                assert!(
+                    w.src_port < d.nodes[w.src].outputs.len() && w.dst_port < d.nodes[w.dst].inputs.len(),
+                    "{}: {} -> {} ({w:?})",
+                    file.display(),
+                    d.nodes[w.src].name,
+                    d.nodes[w.dst].name
+                );
+            }
+            drawn += 1;
+        }
+    }
+    assert!(drawn >= 60, "only {drawn} diagrams drawn");
+}
+
+#[test]
+fn a_collapsed_subsystem_is_one_box_wired_at_its_ports() {
+    let flat = ctlgraph::core::load(Path::new("graphs/tutorial/subsystem.yaml"), &[]).unwrap();
+    let model = ctlgraph::core::compile(&flat, &ctlgraph::registry()).unwrap();
+    let d = build(&flat, &model, false);
+    let soft = d.nodes.iter().position(|n| n.name == "soft").unwrap();
+    assert!(d.nodes[soft].subsystem);
+    assert_eq!(
+        (d.nodes[soft].inputs.clone(), d.nodes[soft].outputs.clone()),
+        (vec!["r".into(), "y".into()], vec!["u".into()])
+    );
+    let into_soft: Vec<(&str, &str)> = d
+        .wires
+        .iter()
+        .filter(|w| w.dst == soft)
+        .map(|w| (d.nodes[w.src].name.as_str(), d.nodes[soft].inputs[w.dst_port].as_str()))
+        .collect();
+    assert_eq!(into_soft, [("r", "r"), ("plant_soft", "y")]);
+    // The loop is cut at the plant's output: drawn back, everything else forward.
+    let plant = d.nodes.iter().position(|n| n.name == "plant_soft").unwrap();
+    assert!(d.nodes[plant].x > d.nodes[soft].x, "the plant is drawn after its controller");
+}
+
+#[test]
+fn the_cli_writes_the_svg() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("d.svg");
+    let done = std::process::Command::new(env!("CARGO_BIN_EXE_ctlgraph"))
+        .args(["diagram", "graphs/tutorial/pid_loop.yaml", "--svg", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(done.status.success(), "{}", String::from_utf8_lossy(&done.stderr));
+    assert_eq!(String::from_utf8_lossy(&done.stdout), format!("{}: 4 boxes, 4 wires\n", out.display()));
+    assert!(std::fs::read_to_string(&out).unwrap().starts_with("<svg "));
+}
