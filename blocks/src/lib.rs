@@ -20,6 +20,7 @@ pub mod fuzzy;
 pub mod integrator;
 pub mod math;
 pub mod milling;
+pub mod motion;
 pub mod noise;
 pub mod nonlinear;
 pub mod pid;
@@ -51,6 +52,7 @@ pub fn registry() -> Registry {
         fuzzy::TYPES,
         force::TYPES,
         milling::TYPES,
+        motion::TYPES,
         smc::TYPES,
         estimation::TYPES,
         routing::TYPES,
