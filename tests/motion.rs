@@ -70,3 +70,66 @@ proptest! {
         prop_assert!((p.duration - (length / p.peak_feed + ramp)).abs() < 1e-9 * p.duration);
     }
 }
+
+#[test]
+fn the_support_point_is_across_the_wall_along_the_axis() {
+    // p = (400, 0, 10), n = (3, 4, 0) (not unit), H = 5, d = 1: q = p + 4·(0.6, 0.8, 0).
+    let yaml = "simulation: { stop: 0.01, solver: { method: rk4, step: 1.0e-3 } }\n\
+                blocks:\n  p: { type: constant, value: [400, 0, 10] }\n  n: { type: constant, value: [3, 4, 0] }\n  \
+                q: { type: mirror_offset, thickness: 5, depth: 1 }\n\
+                wires: [p -> q.p, n -> q.n]\nrecord: [q]\n";
+    let trace = run(yaml);
+    let q: Vec<f64> = (1..=3).map(|k| *trace.column(&format!("q[{k}]")).unwrap().last().unwrap()).collect();
+    assert_eq!(q, [402.4, 3.2, 10.0]);
+    let stopped = ctlgraph::simulate(
+        ctlgraph::compile_str(&yaml.replace("[3, 4, 0]", "[0, 0, 0]"), "t.yaml", &[]).unwrap(),
+        None,
+    );
+    let message = stopped.unwrap_err().to_string();
+    assert!(message.contains("block `q`") && message.contains("the tool axis n has zero length"), "{message}");
+    let e = error(&yaml.replace("depth: 1", "depth: 5"));
+    assert!(e.to_string().contains("`depth`: must be in [0, thickness)"), "{e}");
+}
+
+#[test]
+fn a_fitted_arc_and_its_paired_axis_curve() {
+    // The paper's machining-side arc (ρ = 400 mm, 30°) and a point 50 mm up
+    // the tool axis on a 450 mm arc: P and O stay paired at every u.
+    let yaml = "simulation: { stop: 1.0, solver: { method: rk4, step: 1.0e-2 } }\n\
+                blocks:\n  u: { type: ramp, slope: 1 }\n  \
+                path: { type: bspline_path, curve: [\"400*cos(v)\", \"400*sin(v)\", \"0\"], range: [0, \"pi/6\"],\n          \
+                axis_curve: [\"450*cos(v)\", \"450*sin(v)\", \"50\"], samples: 60, control_points: 15 }\n\
+                wires: [u -> path]\nrecord: [p: path.p, dp: path.dp, o: path.o]\n";
+    let trace = run(yaml);
+    let col = |name: &str| trace.column(name).unwrap().to_vec();
+    let (px, py, ox, oy, oz) = (col("p[1]"), col("p[2]"), col("o[1]"), col("o[2]"), col("o[3]"));
+    for k in 0..px.len() {
+        assert!(((px[k] * px[k] + py[k] * py[k]).sqrt() - 400.0).abs() < 1e-5, "k {k}");
+        assert!((py[k].atan2(px[k]) - oy[k].atan2(ox[k])).abs() < 1e-7, "paired at k {k}");
+        assert!((oz[k] - 50.0).abs() < 1e-9);
+    }
+    assert!(
+        py[0].abs() < 1e-12
+            && (py.last().unwrap().atan2(*px.last().unwrap()) - std::f64::consts::PI / 6.0).abs() < 1e-12
+    );
+    // dP/du is the chord length of the samples along the tangent.
+    let (dx, dy) = (col("dp[1]"), col("dp[2]"));
+    let arc = 400.0 * std::f64::consts::PI / 6.0;
+    assert!(dx.iter().zip(&dy).all(|(a, b)| ((a * a + b * b).sqrt() - arc).abs() < 1e-3 * arc));
+}
+
+#[test]
+fn path_mistakes_are_named() {
+    let base =
+        "blocks:\n  u: { type: constant, value: 0.5 }\n  path: { type: bspline_path, PARAMS }\nwires: [u -> path]\n";
+    let e = error(&base.replace("PARAMS", "points: [[0, 0], [1, 1], [2, 0], [3, 1]], curve: [\"v\", \"v\"]"));
+    assert!(e.to_string().contains("`curve`: give `points` or `curve`, not both"), "{e}");
+    let e = error(&base.replace("PARAMS", "points: [[0], [1], [2], [3]]"));
+    assert!(e.to_string().contains("every point needs 2 or 3 coordinates"), "{e}");
+    let e = error(&base.replace("PARAMS", "points: [[0, 0], [1, 1], [2, 0], [3, 1]], axis_points: [[0, 1], [1, 2]]"));
+    assert!(e.to_string().contains("`axis_points`: give 4 points of 2 coordinates"), "{e}");
+    let e = error(&base.replace("PARAMS", "curve: [\"cos(w)\", \"v\"]"));
+    assert!(e.to_string().contains("`curve`: `cos(w)`"), "{e}");
+    let e = error(&base.replace("PARAMS", "points: [[0, 0], [0, 0], [2, 0], [3, 1]]"));
+    assert!(e.to_string().contains("two consecutive points are equal"), "{e}");
+}

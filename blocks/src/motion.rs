@@ -2,11 +2,204 @@
 //! the jerk-limited S-shaped feed profile and the feed limits a path's
 //! curvature imposes.
 
+pub mod bspline;
+
 use crate::param;
+use ctlgraph_core::expr::Expr;
+use ctlgraph_core::params::VarScope;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 
-pub const TYPES: &[BlockType] = &[BlockType {
+pub const TYPES: &[BlockType] = &[S_CURVE, BSPLINE_PATH, MIRROR_OFFSET];
+
+const BSPLINE_PATH: BlockType = BlockType {
+    name: "bspline_path",
+    category: "motion",
+    summary: "A cubic B-spline path fitted by least squares to points; P(u), P'(u), P''(u) at the input u.",
+    doc: "Fits a cubic B-spline to the points Q_k (2-D or 3-D) by least squares with chord-length \
+          parameters and knots by averaging (Piegl & Tiller, The NURBS Book, eq. 9.5, 9.68–9.69, \
+          9.63–9.67; the mirror-milling paper's refs): the end points are met exactly, \
+          `control_points` = the number of points interpolates. Points come inline (`points`, a list of \
+          [x, y] or [x, y, z]) or from expressions of `v` sampled evenly over `range` (`curve`, e.g. an \
+          arc `[\"400*cos(v)\", \"400*sin(v)\", \"0\"]`). Outputs at the input u in [0, 1] (clamped): \
+          the point P(u) and its derivatives P'(u), P''(u) with respect to u.\n\
+          With `axis_points` or `axis_curve` (as many points as the path), a second curve O(u) through a \
+          second point on the tool axis is fitted with the same parameters and knots, so tip and axis \
+          stay paired at every u (the paper's P_i and O_i); its outputs o, do, ddo are added.",
+    inputs: &[PortDoc { name: "u", doc: "path parameter in [0, 1]" }],
+    outputs: &[
+        PortDoc { name: "p", doc: "P(u), width 2 or 3" },
+        PortDoc { name: "dp", doc: "P'(u) = dP/du" },
+        PortDoc { name: "ddp", doc: "P''(u)" },
+        PortDoc { name: "o", doc: "O(u) (with axis_points or axis_curve)" },
+        PortDoc { name: "do", doc: "O'(u)" },
+        PortDoc { name: "ddo", doc: "O''(u)" },
+    ],
+    params: &[
+        param("points", None, "the points, a list of [x, y] or [x, y, z] (or give curve)"),
+        param("curve", None, "expressions of v, one per coordinate (instead of points)"),
+        param("range", Some("[0, 1]"), "[v_start, v_end] for curve"),
+        param("samples", Some("50"), "points sampled from curve, 4 … 100000"),
+        param("control_points", Some("min(points, 20)"), "control points, 4 … number of points"),
+        param("axis_points", None, "points on the tool axis, one per path point"),
+        param("axis_curve", None, "expressions of v for the axis points (same range and samples)"),
+    ],
+    build: build_bspline_path,
+};
+
+#[derive(Clone)]
+struct BSplinePath {
+    path: bspline::BSpline,
+    axis: Option<bspline::BSpline>,
+    out: Vec<f64>,
+}
+
+impl Block for BSplinePath {
+    fn updates(&self) -> bool {
+        false
+    }
+
+    fn output(&mut self, io: &mut Io) {
+        let u = io.input(0)[0];
+        let dim = self.path.dim;
+        for (k, curve) in [Some(&self.path), self.axis.as_ref()].into_iter().flatten().enumerate() {
+            curve.eval(u, &mut self.out);
+            for d in 0..3 {
+                io.output(3 * k + d).copy_from_slice(&self.out[d * dim..(d + 1) * dim]);
+            }
+        }
+    }
+}
+
+/// Points (`dim` numbers each, flattened) from `points_key` inline or from
+/// `curve_key` expressions of `v`; `None` when neither is given.
+fn read_points(p: &mut Params, points_key: &str, curve_key: &str) -> Result<Option<(Vec<f64>, usize)>, Diagnostic> {
+    match (p.has(points_key), p.has(curve_key)) {
+        (true, true) => Err(p.error(curve_key, format!("give `{points_key}` or `{curve_key}`, not both"))),
+        (true, false) => {
+            let rows = p.matrix(points_key)?;
+            let dim = rows[0].len();
+            if !(2..=3).contains(&dim) || rows.iter().any(|r| r.len() != dim) {
+                return Err(p.error(points_key, "every point needs 2 or 3 coordinates, all alike"));
+            }
+            Ok(Some((rows.concat(), dim)))
+        }
+        (false, true) => {
+            let exprs: Vec<String> = p.strings(curve_key)?.iter().map(|s| s.to_string()).collect();
+            if !(2..=3).contains(&exprs.len()) {
+                return Err(p.error(curve_key, "give 2 or 3 expressions of v, one per coordinate"));
+            }
+            let range = p.opt_vector("range")?.unwrap_or_else(|| vec![0.0, 1.0]);
+            if range.len() != 2 || range[0] >= range[1] || range.iter().any(|v| !v.is_finite()) {
+                return Err(p.error("range", "expected [v_start, v_end] with v_start < v_end"));
+            }
+            let samples = p.count_or("samples", 50, 100_000)?;
+            if samples < 4 {
+                return Err(p.error("samples", "a cubic needs at least 4 points"));
+            }
+            let scope = VarScope { vars: &["v"], params: p.scope() };
+            let mut compiled = Vec::new();
+            for text in &exprs {
+                let e = Expr::parse(text, &scope).map_err(|e| {
+                    let d = p.error(curve_key, format!("`{text}`: {e}"));
+                    Diagnostic { hint: e.hint.clone(), ..d }
+                })?;
+                compiled.push(e);
+            }
+            let mut points = Vec::with_capacity(samples * exprs.len());
+            for k in 0..samples {
+                let v = range[0] + (range[1] - range[0]) * k as f64 / (samples - 1) as f64;
+                points.extend(compiled.iter().map(|e| e.eval(&[v])));
+            }
+            Ok(Some((points, exprs.len())))
+        }
+        (false, false) => Ok(None),
+    }
+}
+
+fn build_bspline_path(p: &mut Params) -> Result<Built, Diagnostic> {
+    let Some((points, dim)) = read_points(p, "points", "curve")? else {
+        return Err(p.block_error("give the path as `points` or `curve`"));
+    };
+    let n_points = points.len() / dim;
+    let n_control = p.count_or("control_points", n_points.min(20), n_points)?;
+    if n_control < 4 {
+        return Err(p.error("control_points", "a cubic needs at least 4"));
+    }
+    let params = bspline::chord_parameters(&points, dim).map_err(|m| p.error("points", m))?;
+    let path = bspline::BSpline::fit(&points, dim, &params, n_control).map_err(|m| p.error("control_points", m))?;
+    let axis = match read_points(p, "axis_points", "axis_curve")? {
+        None => None,
+        Some((axis, axis_dim)) => {
+            if axis_dim != dim || axis.len() != points.len() {
+                return Err(p.error("axis_points", format!("give {n_points} points of {dim} coordinates, as the path")));
+            }
+            Some(bspline::BSpline::fit(&axis, dim, &params, n_control).map_err(|m| p.error("axis_points", m))?)
+        }
+    };
+    let mut iface = Interface::new(SampleTime::Inherited).input("u", Width::Fixed(1), true).piecewise_constant();
+    let names: &[&str] = if axis.is_some() { &["p", "dp", "ddp", "o", "do", "ddo"] } else { &["p", "dp", "ddp"] };
+    for name in names {
+        iface = iface.output(name, Width::Fixed(dim));
+    }
+    Ok(Built::new(BSplinePath { path, axis, out: vec![0.0; 3 * dim] }, iface))
+}
+
+const MIRROR_OFFSET: BlockType = BlockType {
+    name: "mirror_offset",
+    category: "motion",
+    summary: "The support head's point across a wall from the tool tip (mirror milling, eq. 3).",
+    doc: "q = p + (H − d)·n/|n|: the point on the far side of a wall of thickness H, along the tool axis \
+          n through the tool tip p, when the cut is d deep (the mirror-milling paper's eq. 3: the support \
+          head stays opposite the cutter on the remaining thickness). p, n and q are 3-vectors in one \
+          frame; n need not be a unit vector (a zero n gives NaN, and the run stops naming the block).",
+    inputs: &[
+        PortDoc { name: "p", doc: "tool-tip point, width 3" },
+        PortDoc { name: "n", doc: "tool-axis direction, width 3, pointing through the wall" },
+    ],
+    outputs: &[PortDoc { name: "q", doc: "support-head point, width 3" }],
+    params: &[
+        param("thickness", None, "wall thickness H, > 0"),
+        param("depth", Some("0"), "depth of cut d, 0 <= d < H"),
+    ],
+    build: build_mirror_offset,
+};
+
+#[derive(Clone)]
+struct MirrorOffset {
+    offset: f64,
+}
+
+impl Block for MirrorOffset {
+    fn updates(&self) -> bool {
+        false
+    }
+
+    fn output(&mut self, io: &mut Io) {
+        let (p, n) = (io.input(0), io.input(1));
+        let norm = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let k = if norm > 0.0 { self.offset / norm } else { f64::NAN };
+        let q = [p[0] + k * n[0], p[1] + k * n[1], p[2] + k * n[2]];
+        io.output(0).copy_from_slice(&q);
+    }
+
+    fn diagnose(&self) -> Option<String> {
+        Some("the tool axis n has zero length".into())
+    }
+}
+
+fn build_mirror_offset(p: &mut Params) -> Result<Built, Diagnostic> {
+    let thickness = p.positive("thickness")?;
+    let depth = p.number_where("depth", Some(0.0), |d| (0.0..thickness).contains(&d), "in [0, thickness)")?;
+    let iface = Interface::new(SampleTime::Inherited)
+        .input("p", Width::Fixed(3), true)
+        .input("n", Width::Fixed(3), true)
+        .output("q", Width::Fixed(3))
+        .piecewise_constant();
+    Ok(Built::new(MirrorOffset { offset: thickness - depth }, iface))
+}
+
+const S_CURVE: BlockType = BlockType {
     name: "s_curve",
     category: "motion",
     summary: "Jerk-limited (seven-segment, S-shaped) feed profile over a path of given length.",
@@ -44,7 +237,7 @@ pub const TYPES: &[BlockType] = &[BlockType {
         param("omega", None, "tool-axis angular speed limit ω [rad/s] (with radius)"),
     ],
     build: build_s_curve,
-}];
+};
 
 /// The curvature limits on the feed for a path of radius `radius`; each
 /// `None` limit is skipped. See the block's doc.

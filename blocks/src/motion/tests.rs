@@ -85,3 +85,89 @@ fn curvature_limits_by_hand() {
     assert_eq!(all.feed_limit(), 16.0);
     assert_eq!(CurvatureLimits { radius: 1.0, ..Default::default() }.feed_limit(), f64::INFINITY);
 }
+
+mod spline {
+    use super::super::bspline::{BSpline, chord_parameters};
+
+    fn arc(n: usize, radius: f64, angle: f64) -> Vec<f64> {
+        (0..n)
+            .flat_map(|k| {
+                let a = angle * k as f64 / (n - 1) as f64;
+                [radius * a.cos(), radius * a.sin(), 0.0]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn interpolation_passes_through_every_point() {
+        let pts = arc(9, 10.0, 1.0);
+        let u = chord_parameters(&pts, 3).unwrap();
+        let s = BSpline::fit(&pts, 3, &u, 9).unwrap();
+        let mut out = [0.0; 9];
+        for (k, &uk) in u.iter().enumerate() {
+            s.eval(uk, &mut out);
+            for c in 0..3 {
+                assert!((out[c] - pts[3 * k + c]).abs() < 1e-10, "point {k}: {:?}", &out[..3]);
+            }
+        }
+    }
+
+    #[test]
+    fn points_on_a_line_give_that_line() {
+        let pts: Vec<f64> = (0..20).flat_map(|k| [1.0 + 2.0 * k as f64, -3.0 * k as f64]).collect();
+        let u = chord_parameters(&pts, 2).unwrap();
+        let s = BSpline::fit(&pts, 2, &u, 6).unwrap();
+        let mut out = [0.0; 6];
+        for k in 0..=50 {
+            let v = k as f64 / 50.0;
+            s.eval(v, &mut out);
+            // Uniform points: chord-length parameters are arc length / L, so C(u) = p0 + u·(p_end − p0).
+            assert!((out[0] - (1.0 + 38.0 * v)).abs() < 1e-10 && (out[1] + 57.0 * v).abs() < 1e-10, "{out:?}");
+            assert!((out[2] - 38.0).abs() < 1e-8 && (out[3] + 57.0).abs() < 1e-8 && out[4].abs() < 1e-6, "{out:?}");
+        }
+    }
+
+    #[test]
+    fn derivatives_match_differences() {
+        let pts = arc(40, 400.0, std::f64::consts::PI / 6.0);
+        let u = chord_parameters(&pts, 3).unwrap();
+        let s = BSpline::fit(&pts, 3, &u, 12).unwrap();
+        let (mut a, mut b, mut c) = ([0.0; 9], [0.0; 9], [0.0; 9]);
+        let h = 1e-5;
+        for k in 1..20 {
+            let v = k as f64 / 20.0 + 0.013;
+            s.eval(v - h, &mut a);
+            s.eval(v, &mut b);
+            s.eval(v + h, &mut c);
+            for d in 0..3 {
+                let first = (c[d] - a[d]) / (2.0 * h);
+                let second = (c[3 + d] - a[3 + d]) / (2.0 * h);
+                assert!((first - b[3 + d]).abs() < 1e-6 * (1.0 + b[3 + d].abs()), "u {v}: {first} vs {}", b[3 + d]);
+                assert!((second - b[6 + d]).abs() < 1e-4 * (1.0 + b[6 + d].abs()), "u {v}: {second} vs {}", b[6 + d]);
+            }
+        }
+    }
+
+    #[test]
+    fn an_arc_fit_keeps_radius_length_and_curvature() {
+        // The paper's machining-side arc: ρ = 400 mm over 30°, 50 samples, 12 control points.
+        let (r, angle) = (400.0, std::f64::consts::PI / 6.0);
+        let pts = arc(50, r, angle);
+        let u = chord_parameters(&pts, 3).unwrap();
+        let s = BSpline::fit(&pts, 3, &u, 12).unwrap();
+        let mut out = [0.0; 9];
+        for k in 0..=200 {
+            s.eval(k as f64 / 200.0, &mut out);
+            let radius = (out[0] * out[0] + out[1] * out[1]).sqrt();
+            assert!((radius - r).abs() < 1e-5, "radius {radius}"); // 10 nm
+            // |C'| = the chord length of the samples; curvature |C' × C''| / |C'|³ = 1/ρ.
+            let speed = (out[3] * out[3] + out[4] * out[4]).sqrt();
+            let chord = 49.0 * 2.0 * r * (angle / 98.0).sin();
+            assert!((speed - chord).abs() < 1e-3 * chord, "speed {speed} vs {chord}");
+            let cross = out[3] * out[7] - out[4] * out[6];
+            assert!((cross / speed.powi(3) - 1.0 / r).abs() < 1e-3 / r, "curvature {}", cross / speed.powi(3));
+        }
+        assert!(BSpline::fit(&pts, 3, &u, 3).is_err() && BSpline::fit(&pts, 3, &u, 51).is_err());
+        assert!(chord_parameters(&[1.0, 1.0, 1.0, 1.0], 2).is_err());
+    }
+}
