@@ -133,3 +133,66 @@ fn path_mistakes_are_named() {
     let e = error(&base.replace("PARAMS", "points: [[0, 0], [0, 0], [2, 0], [3, 1]]"));
     assert!(e.to_string().contains("two consecutive points are equal"), "{e}");
 }
+
+/// The paper's chain on its machining-side arc: S-curve feed → Taylor
+/// interpolation of u every Tc = 2 ms → the fitted path.
+const ARC_CHAIN: &str = "simulation: { stop: 12, solver: { method: rk4, step: 2.0e-3 } }\n\
+    parameters: { radius: 400, angle: 0.5235987755982988 }\n\
+    blocks:\n  plan: { type: s_curve, length: \"radius*angle\", feed: 20, accel: 100, jerk: 1000 }\n  \
+    path: { type: bspline_path, curve: [\"radius*cos(v)\", \"radius*sin(v)\", \"0\"], range: [0, angle], samples: 60, control_points: 15 }\n  \
+    interp: { type: path_interpolator, sample_time: 2.0e-3 }\n\
+    wires: [plan.f -> interp.f, plan.a -> interp.a, path.dp -> interp.dp, path.ddp -> interp.ddp, interp -> path]\n\
+    record: [s: plan.s, u: interp, p: path.p]\n";
+
+#[test]
+fn the_interpolated_point_follows_the_planned_length() {
+    let trace = run(ARC_CHAIN);
+    let (s, u) = (trace.column("s").unwrap(), trace.column("u").unwrap());
+    let (x, y) = (trace.column("p[1]").unwrap(), trace.column("p[2]").unwrap());
+    // The arc length travelled (angle × radius) against the planned s, at
+    // the interpolator's hits (between them u holds while s moves on; the
+    // feed profile's own events add major steps there).
+    let mut worst: f64 = 0.0;
+    for (k, &t) in trace.t().iter().enumerate() {
+        if ((t / 2.0e-3).round() * 2.0e-3 - t).abs() < 1e-12 {
+            worst = worst.max((400.0 * y[k].atan2(x[k]) - s[k]).abs());
+        }
+    }
+    // 7e-5 mm: the third-order term the expansion drops, J·Tc³/6 = 1.3e-6 mm
+    // a step, summed over a jerk phase of 50 steps (elsewhere some 1e-8 mm).
+    assert!(worst < 1e-4, "{worst} mm");
+    assert!((1.0 - u.last().unwrap()).abs() < 1e-6, "u ends at {}", u.last().unwrap());
+    assert!(u.windows(2).all(|w| w[1] >= w[0]));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// On a straight path at constant feed, u advances by f·Tc/L a period
+    /// and stops at 1; for any feed and acceleration signs it stays in
+    /// [0, 1] and never moves back.
+    #[test]
+    fn the_interpolator_advances_monotonically(
+        (dx, dy) in (-50.0..50.0f64, 1.0..50.0f64),
+        feed in 0.1..40.0f64,
+        accel in -50.0..50.0f64,
+        tc in 1.0e-3..1.0e-2f64,
+    ) {
+        let yaml = format!(
+            "simulation: {{ stop: 1.0, solver: {{ method: rk4, step: {tc:e} }} }}\n\
+             blocks:\n  f: {{ type: constant, value: {feed:e} }}\n  a: {{ type: constant, value: 0 }}\n  \
+             d1: {{ type: constant, value: [{dx:e}, {dy:e}] }}\n  d2: {{ type: constant, value: [0, 0] }}\n  \
+             i: {{ type: path_interpolator, sample_time: {tc:e} }}\n\
+             wires: [f -> i.f, a -> i.a, d1 -> i.dp, d2 -> i.ddp]\nrecord: [u: i]\n"
+        );
+        let trace = run(&yaml);
+        let length = (dx * dx + dy * dy).sqrt();
+        for (&t, &u) in trace.t().iter().zip(trace.column("u").unwrap()) {
+            let j = (t / tc + 1e-9).floor();
+            prop_assert!((u - (j * feed * tc / length).min(1.0)).abs() < 1e-9, "t {t}: u {u}");
+        }
+        let varying = yaml.replace("a: { type: constant, value: 0 }", &format!("a: {{ type: sine, amplitude: {accel:e}, frequency: 3 }}"));
+        let u = run(&varying).column("u").unwrap().to_vec();
+        prop_assert!(u.iter().all(|v| (0.0..=1.0).contains(v)) && u.windows(2).all(|w| w[1] >= w[0]));
+    }
+}

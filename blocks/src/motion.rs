@@ -3,6 +3,7 @@
 //! curvature imposes.
 
 pub mod bspline;
+pub mod interpolator;
 
 use crate::param;
 use ctlgraph_core::expr::Expr;
@@ -10,7 +11,7 @@ use ctlgraph_core::params::VarScope;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 
-pub const TYPES: &[BlockType] = &[S_CURVE, BSPLINE_PATH, MIRROR_OFFSET];
+pub const TYPES: &[BlockType] = &[S_CURVE, BSPLINE_PATH, interpolator::PATH_INTERPOLATOR, MIRROR_OFFSET];
 
 const BSPLINE_PATH: BlockType = BlockType {
     name: "bspline_path",

@@ -171,3 +171,25 @@ mod spline {
         assert!(chord_parameters(&[1.0, 1.0, 1.0, 1.0], 2).is_err());
     }
 }
+
+mod interpolation {
+    use super::super::interpolator::taylor_step;
+
+    #[test]
+    fn on_a_line_u_advances_by_the_travelled_fraction() {
+        // |P'| = L = 50, P'' = 0: Δu = (f·Tc + a·Tc²/2)/L.
+        let u = taylor_step(0.2, 10.0, 40.0, &[30.0, 40.0], &[0.0, 0.0], 0.002);
+        assert!((u - (0.2 + (10.0 * 0.002 + 40.0 * 0.002f64.powi(2) / 2.0) / 50.0)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn the_curvature_term_corrects_a_non_arc_length_parameter() {
+        // P(u) = (u, u²): at u = 1, P' = (1, 2), P'' = (0, 2), P'·P'' = 4, |P'|² = 5.
+        let (f, a, tc) = (3.0, 0.0, 0.01);
+        let u = taylor_step(1.0 - 0.5, f, a, &[1.0, 1.0], &[0.0, 2.0], tc);
+        // At u = 0.5: P' = (1, 1), P'' = (0, 2): u̇ = f/√2, ü = −f²·2/4.
+        let expected = 0.5 + tc * f / 2f64.sqrt() - tc * tc / 2.0 * f * f * 2.0 / 4.0;
+        assert!((u - expected).abs() < 1e-15, "{u} vs {expected}");
+        assert_eq!(taylor_step(0.999, 100.0, 0.0, &[1.0, 0.0], &[0.0, 0.0], 0.01), 1.0);
+    }
+}
