@@ -196,3 +196,46 @@ proptest! {
         prop_assert!(u.iter().all(|v| (0.0..=1.0).contains(v)) && u.windows(2).all(|w| w[1] >= w[0]));
     }
 }
+
+/// The paper's synchronisation test: arcs of 400 mm (machining) and 500 mm
+/// (support) over 30°, the machining feed up to 20 mm/s.
+fn mirror_plan(extra: &str) -> String {
+    format!(
+        "simulation: {{ stop: 12, solver: {{ method: rk4, step: 2.0e-3 }} }}\n\
+         blocks:\n  plan: {{ type: mirror_feed_plan, range: [0, \"pi/6\"], samples: 60, control_points: 15,\n    \
+         curve: [\"400*cos(v)\", \"400*sin(v)\", \"0\"], support_curve: [\"500*cos(v)\", \"500*sin(v)\", \"0\"],\n    \
+         feed: 20, accel: 100, jerk: 1000, sample_time: 2.0e-3{extra} }}\n\
+         record: [u: plan.u, f1: plan.f1, f2: plan.f2, lambda: plan.lambda, p: plan.p, q: plan.q]\n"
+    )
+}
+
+#[test]
+fn mirrored_arcs_feed_in_the_ratio_of_their_radii_and_finish_together() {
+    let trace = run(&mirror_plan(""));
+    let col = |n: &str| trace.column(n).unwrap().to_vec();
+    let (f1, f2, lambda, u) = (col("f1"), col("f2"), col("lambda"), col("u"));
+    let peak = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    assert!((peak(&f1) - 20.0).abs() < 1e-12 && (peak(&f2) - 25.0).abs() < 0.25, "{} {}", peak(&f1), peak(&f2));
+    assert!(lambda.iter().all(|l| (l - 1.25).abs() < 1e-4), "λ within 1e-4 of 500/400");
+    // The same u on both sides: mirrored points at the same angle, and both
+    // reach the end (u = 1) in the same period.
+    let (px, py, qx, qy) = (col("p[1]"), col("p[2]"), col("q[1]"), col("q[2]"));
+    for k in 0..u.len() {
+        assert!((py[k].atan2(px[k]) - qy[k].atan2(qx[k])).abs() < 1e-7);
+    }
+    // Where the machining side stops, u is at the end and the support side stops too.
+    let end = (1..f1.len()).find(|&k| f1[k] == 0.0).expect("stops");
+    assert!((1.0 - u[end]).abs() < 1e-6 && f2[end..].iter().all(|&f| f == 0.0), "u {}", u[end]);
+}
+
+#[test]
+fn a_support_feed_limit_lowers_the_machining_feed() {
+    // f2 <= 22 mm/s with λ = 1.25: f1 at most 17.6.
+    let trace = run(&mirror_plan(", support_feed: 22"));
+    let peak = |n: &str| trace.column(n).unwrap().iter().copied().fold(0.0, f64::max);
+    let (f1, f2) = (peak("f1"), peak("f2"));
+    assert!(f2 <= 22.0 * (1.0 + 1e-12) && f2 > 22.0 * 0.99 * 0.999, "f2 {f2}");
+    assert!(f1 <= 17.6 * 1.0001 && f1 > 17.6 * 0.99 * 0.999, "f1 {f1}");
+    let e = error(&mirror_plan(", support_feed: 1e-9"));
+    assert!(e.to_string().contains("keeps the support side within its limits"), "{e}");
+}

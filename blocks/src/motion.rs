@@ -4,6 +4,7 @@
 
 pub mod bspline;
 pub mod interpolator;
+pub mod sync;
 
 use crate::param;
 use ctlgraph_core::expr::Expr;
@@ -11,7 +12,8 @@ use ctlgraph_core::params::VarScope;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 
-pub const TYPES: &[BlockType] = &[S_CURVE, BSPLINE_PATH, interpolator::PATH_INTERPOLATOR, MIRROR_OFFSET];
+pub const TYPES: &[BlockType] =
+    &[S_CURVE, BSPLINE_PATH, interpolator::PATH_INTERPOLATOR, MIRROR_OFFSET, sync::MIRROR_FEED_PLAN];
 
 const BSPLINE_PATH: BlockType = BlockType {
     name: "bspline_path",
