@@ -189,3 +189,26 @@ fn count_events(yaml: &str) -> u64 {
     let mut sim = Simulator::new(model, Some(2.0));
     sim.run(&mut |_, _| {}).unwrap().events
 }
+
+#[test]
+fn the_motion_blocks_allocate_nothing() {
+    // S-curve → Taylor interpolation → fitted path with a paired axis curve
+    // → mirror offset; and the offline feed plan's lookups.
+    let yaml = "
+simulation: { stop: 12, solver: { method: rk4, step: 2.0e-3 } }
+blocks:
+  plan:   { type: s_curve, length: 209.43951023931956, feed: 20, accel: 100, jerk: 1000, radius: 400, accel_normal: 2 }
+  path:   { type: bspline_path, curve: [\"400*cos(v)\", \"400*sin(v)\", \"0\"], range: [0, \"pi/6\"], samples: 60,
+            axis_curve: [\"400*cos(v)\", \"400*sin(v)\", \"50\"] }
+  interp: { type: path_interpolator, sample_time: 2.0e-3 }
+  axis:   { type: sum, signs: \"+-\" }
+  mirror: { type: mirror_offset, thickness: 5, depth: 1 }
+  both:   { type: mirror_feed_plan, curve: [\"400*cos(v)\", \"400*sin(v)\"], support_curve: [\"500*cos(v)\", \"500*sin(v)\"],
+            range: [0, \"pi/6\"], feed: 20, accel: 100, jerk: 1000, sample_time: 2.0e-3 }
+wires: [plan.f -> interp.f, plan.a -> interp.a, path.dp -> interp.dp, path.ddp -> interp.ddp, interp -> path,
+        path.o -> axis.u1, path.p -> axis.u2, path.p -> mirror.p, axis -> mirror.n]
+record: [q: mirror, f2: both.f2]
+";
+    let model = ctlgraph::compile_str(yaml, "motion.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(count_allocations(model, 1, 5_000), 0);
+}
