@@ -297,6 +297,9 @@ fn check(graph: &Path, sets: &[String]) -> Result<(), Failure> {
         };
         println!("  {:>3}  {:<width$}  {:<26}  {}{zoh}", i + 1, m.name, m.type_name, m.sample_time);
     }
+    for (name, report) in model.build_reports() {
+        println!("{name}: {report}");
+    }
     let solver = model.sim.method;
     let held = model.n_states - model.integrated_states();
     let held = if held > 0 { format!(" ({held} stepped by exact ZOH)") } else { String::new() };

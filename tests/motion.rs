@@ -3,7 +3,7 @@
 //! limits hold for any path and limits.
 
 mod common;
-use common::{error, run};
+use common::{ctlgraph, error, run, text};
 use proptest::prelude::*;
 
 fn graph(params: &str, stop: f64) -> String {
@@ -238,4 +238,25 @@ fn a_support_feed_limit_lowers_the_machining_feed() {
     assert!(f1 <= 17.6 * 1.0001 && f1 > 17.6 * 0.99 * 0.999, "f1 {f1}");
     let e = error(&mirror_plan(", support_feed: 1e-9"));
     assert!(e.to_string().contains("keeps the support side within its limits"), "{e}");
+}
+
+#[test]
+fn check_reports_what_the_planners_decided() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("plan.yaml");
+    let yaml = mirror_plan(", support_feed: 22").replace(
+        "blocks:\n",
+        "blocks:\n  feed: { type: s_curve, length: 100, feed: 20, accel: 100, jerk: 1000, radius: 400, accel_normal: 0.5 }\n",
+    );
+    std::fs::write(&file, yaml).unwrap();
+    let out = ctlgraph(&["check", file.to_str().unwrap()]);
+    let stdout = text(&out.stdout);
+    assert!(
+        stdout.contains("feed: peak feed 14.142136 (the curvature limits lower `feed` 20 to 14.142136)"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("plan: machining feed limit lowered to 17.6 in 1 re-plan(s) for the support side's limits; f1 peaks at 17.6, f2 at 22;"),
+        "{stdout}"
+    );
 }

@@ -242,6 +242,11 @@ const S_CURVE: BlockType = BlockType {
     build: build_s_curve,
 };
 
+/// A number for a report: six decimals at most.
+pub(crate) fn shown(v: f64) -> f64 {
+    (v * 1e6).round() / 1e6
+}
+
 /// The curvature limits on the feed for a path of radius `radius`; each
 /// `None` limit is skipped. See the block's doc.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -344,6 +349,9 @@ struct SCurveBlock {
     start: f64,
     /// Absolute event times.
     events: Vec<f64>,
+    /// The feed limit given, and the curvature limit when it was lower.
+    feed: f64,
+    curvature_limit: Option<f64>,
 }
 
 impl Block for SCurveBlock {
@@ -365,6 +373,21 @@ impl Block for SCurveBlock {
     fn min_event_spacing(&self) -> f64 {
         self.events.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).fold(f64::INFINITY, f64::min)
     }
+
+    fn build_report(&self) -> Option<String> {
+        let p = &self.profile;
+        let limited = match self.curvature_limit {
+            Some(c) if c < self.feed => format!(" (the curvature limits lower `feed` {} to {})", self.feed, shown(c)),
+            _ => String::new(),
+        };
+        Some(format!(
+            "peak feed {}{limited}, peak acceleration {}, {} s from t = {}",
+            shown(p.peak_feed),
+            shown(p.peak_accel),
+            shown(p.duration),
+            self.start
+        ))
+    }
 }
 
 fn build_s_curve(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -381,6 +404,8 @@ fn build_s_curve(p: &mut Params) -> Result<Built, Diagnostic> {
         .into_iter()
         .chain([("jerk_normal", jerk_normal), ("omega", omega)])
         .find(|(_, v)| v.is_some());
+    let given = feed;
+    let mut curvature_limit = None;
     match (radius, needs_radius) {
         (None, Some((key, _))) => return Err(p.error(key, "a curvature limit needs the path's `radius`")),
         (Some(r), _) => {
@@ -392,6 +417,7 @@ fn build_s_curve(p: &mut Params) -> Result<Built, Diagnostic> {
                 return Err(p.error("chord_error", format!("must be less than the radius {r}, got {d}")));
             }
             let limits = CurvatureLimits { radius: r, chord: tc.zip(chord_error), accel_normal, jerk_normal, omega };
+            curvature_limit = Some(limits.feed_limit());
             feed = feed.min(limits.feed_limit());
         }
         (None, None) => {}
@@ -404,7 +430,7 @@ fn build_s_curve(p: &mut Params) -> Result<Built, Diagnostic> {
         .output("f", Width::Fixed(1))
         .output("a", Width::Fixed(1))
         .output("s", Width::Fixed(1));
-    Ok(Built::new(SCurveBlock { profile, start, events }, iface))
+    Ok(Built::new(SCurveBlock { profile, start, events, feed: given, curvature_limit }, iface))
 }
 
 #[cfg(test)]

@@ -435,6 +435,13 @@ pub trait Block: Send + dyn_clone::DynClone {
         false
     }
 
+    /// What the block decided when it was built that a user should see in
+    /// `ctlgraph check` (a planned profile's peak and duration, a limit
+    /// that lowered a parameter), if anything.
+    fn build_report(&self) -> Option<String> {
+        None
+    }
+
     /// The value a host program sets, for the compiler's top-level inports
     /// only; library blocks keep the default.
     fn external_input(&mut self) -> Option<&mut [f64]> {

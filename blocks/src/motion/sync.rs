@@ -4,7 +4,7 @@
 
 use super::bspline::{BSpline, chord_parameters};
 use super::interpolator::taylor_step;
-use super::{SCurve, read_points};
+use super::{SCurve, read_points, shown};
 use crate::param;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
@@ -201,6 +201,22 @@ impl Block for MirrorFeedPlan {
         io.set(3, plan.lambda[j]);
         io.output(4).copy_from_slice(&plan.p[j * dim..(j + 1) * dim]);
         io.output(5).copy_from_slice(&plan.q[j * dim..(j + 1) * dim]);
+    }
+
+    fn build_report(&self) -> Option<String> {
+        let plan = &self.plan;
+        let peak = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+        let replanned = match plan.replans {
+            0 => "as given".to_string(),
+            n => format!("lowered to {} in {n} re-plan(s) for the support side's limits", shown(plan.feed)),
+        };
+        Some(format!(
+            "machining feed limit {replanned}; f1 peaks at {}, f2 at {}; {} periods of {} s",
+            shown(peak(&plan.f1)),
+            shown(peak(&plan.f2)),
+            plan.u.len(),
+            self.tc
+        ))
     }
 }
 

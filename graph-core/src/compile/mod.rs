@@ -395,6 +395,12 @@ impl Model {
         Ok(model.out_ports[meta.outputs.start + k])
     }
 
+    /// Each block's report of what it decided when built (see
+    /// [`Block::build_report`]), in execution order.
+    pub fn build_reports(&self) -> impl Iterator<Item = (&str, String)> {
+        self.meta.iter().zip(&self.blocks).filter_map(|(m, b)| b.build_report().map(|r| (m.name.as_str(), r)))
+    }
+
     /// The block owning signal `offset` and the name of its output port.
     pub fn signal_owner(&self, offset: usize) -> Option<(usize, &str)> {
         self.meta.iter().enumerate().find_map(|(i, m)| {
