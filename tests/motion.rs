@@ -123,7 +123,7 @@ fn path_mistakes_are_named() {
     let base =
         "blocks:\n  u: { type: constant, value: 0.5 }\n  path: { type: bspline_path, PARAMS }\nwires: [u -> path]\n";
     let e = error(&base.replace("PARAMS", "points: [[0, 0], [1, 1], [2, 0], [3, 1]], curve: [\"v\", \"v\"]"));
-    assert!(e.to_string().contains("`curve`: give `points` or `curve`, not both"), "{e}");
+    assert!(e.to_string().contains("`curve`: give one of `points`, `curve`, `csv`"), "{e}");
     let e = error(&base.replace("PARAMS", "points: [[0], [1], [2], [3]]"));
     assert!(e.to_string().contains("every point needs 2 or 3 coordinates"), "{e}");
     let e = error(&base.replace("PARAMS", "points: [[0, 0], [1, 1], [2, 0], [3, 1]], axis_points: [[0, 1], [1, 2]]"));
@@ -259,4 +259,32 @@ fn check_reports_what_the_planners_decided() {
         stdout.contains("plan: machining feed limit lowered to 17.6 in 1 re-plan(s) for the support side's limits; f1 peaks at 17.6, f2 at 22;"),
         "{stdout}"
     );
+}
+
+#[test]
+fn points_from_a_csv_file_fit_as_inline_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("arc.csv");
+    let rows: Vec<String> = (0..30)
+        .map(|k| {
+            let a = std::f64::consts::PI / 6.0 * k as f64 / 29.0;
+            format!("{},{},{}", 400.0 * a.cos(), 400.0 * a.sin(), 1.5)
+        })
+        .collect();
+    std::fs::write(&csv, format!("x,y,z\n{}\n", rows.join("\n"))).unwrap();
+    let inline: Vec<String> = rows.iter().map(|r| format!("[{r}]")).collect();
+    let graph = |source: &str| {
+        format!(
+            "simulation: {{ stop: 1, solver: {{ method: rk4, step: 0.05 }} }}\n\
+             blocks:\n  u: {{ type: ramp }}\n  path: {{ type: bspline_path, {source}, control_points: 10 }}\n\
+             wires: [u -> path]\nrecord: [p: path.p, dp: path.dp]\n"
+        )
+    };
+    let from_csv = run(&graph(&format!("csv: \"{}\"", csv.display())));
+    let from_list = run(&graph(&format!("points: [{}]", inline.join(", "))));
+    for name in ["p[1]", "p[2]", "p[3]", "dp[1]", "dp[2]"] {
+        assert_eq!(from_csv.column(name).unwrap(), from_list.column(name).unwrap(), "{name}");
+    }
+    let e = error(&graph(&format!("csv: \"{}\", columns: [x, y, w]", csv.display())));
+    assert!(e.to_string().contains("has no column `w` (columns: x, y, z)"), "{e}");
 }

@@ -23,8 +23,9 @@ const BSPLINE_PATH: BlockType = BlockType {
           parameters and knots by averaging (Piegl & Tiller, The NURBS Book, eq. 9.5, 9.68–9.69, \
           9.63–9.67; the mirror-milling paper's refs): the end points are met exactly, \
           `control_points` = the number of points interpolates. Points come inline (`points`, a list of \
-          [x, y] or [x, y, z]) or from expressions of `v` sampled evenly over `range` (`curve`, e.g. an \
-          arc `[\"400*cos(v)\", \"400*sin(v)\", \"0\"]`). Outputs at the input u in [0, 1] (clamped): \
+          [x, y] or [x, y, z]) from expressions of `v` sampled evenly over `range` (`curve`, e.g. an \
+          arc `[\"400*cos(v)\", \"400*sin(v)\", \"0\"]`), or from the `columns` of a CSV file (`csv`, \
+          one point per row). Outputs at the input u in [0, 1] (clamped): \
           the point P(u) and its derivatives P'(u), P''(u) with respect to u.\n\
           With `axis_points` or `axis_curve` (as many points as the path), a second curve O(u) through a \
           second point on the tool axis is fitted with the same parameters and knots, so tip and axis \
@@ -44,7 +45,11 @@ const BSPLINE_PATH: BlockType = BlockType {
         param("range", Some("[0, 1]"), "[v_start, v_end] for curve"),
         param("samples", Some("50"), "points sampled from curve, 4 … 100000"),
         param("control_points", Some("min(points, 20)"), "control points, 4 … number of points"),
+        param("csv", None, "a CSV file with the points, one per row (instead of points or curve)"),
+        param("columns", Some("[x, y, z]"), "the CSV's coordinate columns, 2 or 3"),
+        param("max_file_mib", Some("256"), "largest CSV file read, in MiB"),
         param("axis_points", None, "points on the tool axis, one per path point"),
+        param("axis_csv", None, "a CSV file with the axis points (same columns)"),
         param("axis_curve", None, "expressions of v for the axis points (same range and samples)"),
     ],
     build: build_bspline_path,
@@ -74,12 +79,42 @@ impl Block for BSplinePath {
     }
 }
 
-/// Points (`dim` numbers each, flattened) from `points_key` inline or from
-/// `curve_key` expressions of `v`; `None` when neither is given.
-fn read_points(p: &mut Params, points_key: &str, curve_key: &str) -> Result<Option<(Vec<f64>, usize)>, Diagnostic> {
+/// Points (`dim` numbers each, flattened) from `{prefix}points` inline,
+/// `{prefix}curve` expressions of `v`, or the `columns` of the CSV file
+/// `{prefix}csv`; `None` when none is given.
+fn read_points(p: &mut Params, prefix: &str) -> Result<Option<(Vec<f64>, usize)>, Diagnostic> {
+    let (points_key, curve_key, csv_key) =
+        (format!("{prefix}points"), format!("{prefix}curve"), format!("{prefix}csv"));
+    let (points_key, curve_key, csv_key) = (points_key.as_str(), curve_key.as_str(), csv_key.as_str());
+    let given: Vec<&str> = [points_key, curve_key, csv_key].into_iter().filter(|k| p.has(k)).collect();
+    if given.len() > 1 {
+        return Err(p.error(given[1], format!("give one of `{points_key}`, `{curve_key}`, `{csv_key}`")));
+    }
+    if p.has(csv_key) {
+        let path = p.path(csv_key)?;
+        let columns: Vec<String> = match p.has("columns") {
+            true => p.strings("columns")?.iter().map(|s| s.to_string()).collect(),
+            false => vec!["x".into(), "y".into(), "z".into()],
+        };
+        if !(2..=3).contains(&columns.len()) {
+            return Err(p.error("columns", "name 2 or 3 columns, one per coordinate"));
+        }
+        let limit = crate::tables::data_file_limit(p)?;
+        let mut coords = Vec::new();
+        for name in &columns[1..] {
+            let (first, other) =
+                crate::tables::read_columns(&path, &columns[0], name, limit).map_err(|m| p.error(csv_key, m))?;
+            if coords.is_empty() {
+                coords.push(first);
+            }
+            coords.push(other);
+        }
+        let n = coords[0].len();
+        let points = (0..n).flat_map(|k| coords.iter().map(move |c| c[k])).collect();
+        return Ok(Some((points, columns.len())));
+    }
     match (p.has(points_key), p.has(curve_key)) {
-        (true, true) => Err(p.error(curve_key, format!("give `{points_key}` or `{curve_key}`, not both"))),
-        (true, false) => {
+        (true, _) => {
             let rows = p.matrix(points_key)?;
             let dim = rows[0].len();
             if !(2..=3).contains(&dim) || rows.iter().any(|r| r.len() != dim) {
@@ -121,7 +156,7 @@ fn read_points(p: &mut Params, points_key: &str, curve_key: &str) -> Result<Opti
 }
 
 fn build_bspline_path(p: &mut Params) -> Result<Built, Diagnostic> {
-    let Some((points, dim)) = read_points(p, "points", "curve")? else {
+    let Some((points, dim)) = read_points(p, "")? else {
         return Err(p.block_error("give the path as `points` or `curve`"));
     };
     let n_points = points.len() / dim;
@@ -131,7 +166,7 @@ fn build_bspline_path(p: &mut Params) -> Result<Built, Diagnostic> {
     }
     let params = bspline::chord_parameters(&points, dim).map_err(|m| p.error("points", m))?;
     let path = bspline::BSpline::fit(&points, dim, &params, n_control).map_err(|m| p.error("control_points", m))?;
-    let axis = match read_points(p, "axis_points", "axis_curve")? {
+    let axis = match read_points(p, "axis_")? {
         None => None,
         Some((axis, axis_dim)) => {
             if axis_dim != dim || axis.len() != points.len() {

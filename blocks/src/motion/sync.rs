@@ -41,6 +41,10 @@ pub const MIRROR_FEED_PLAN: BlockType = BlockType {
         param("samples", Some("50"), "points sampled from the curves"),
         param("support_points", None, "support path points, one per machining point (or support_curve)"),
         param("support_curve", None, "expressions of v for the support path"),
+        param("csv", None, "a CSV file with the machining points (columns as bspline_path)"),
+        param("support_csv", None, "a CSV file with the support points"),
+        param("columns", Some("[x, y, z]"), "the CSVs' coordinate columns, 2 or 3"),
+        param("max_file_mib", Some("256"), "largest CSV file read, in MiB"),
         param("control_points", Some("min(points, 20)"), "control points of both fits"),
         param("feed", None, "machining side's maximum feed, > 0"),
         param("accel", None, "machining side's maximum tangential acceleration, > 0"),
@@ -221,10 +225,10 @@ impl Block for MirrorFeedPlan {
 }
 
 fn build_mirror_feed_plan(p: &mut Params) -> Result<Built, Diagnostic> {
-    let Some((points, dim)) = read_points(p, "points", "curve")? else {
+    let Some((points, dim)) = read_points(p, "")? else {
         return Err(p.block_error("give the machining path as `points` or `curve`"));
     };
-    let Some((support_points, support_dim)) = read_points(p, "support_points", "support_curve")? else {
+    let Some((support_points, support_dim)) = read_points(p, "support_")? else {
         return Err(p.block_error("give the support path as `support_points` or `support_curve`"));
     };
     if support_dim != dim || support_points.len() != points.len() {
