@@ -288,3 +288,25 @@ fn points_from_a_csv_file_fit_as_inline_points() {
     let e = error(&graph(&format!("csv: \"{}\", columns: [x, y, w]", csv.display())));
     assert!(e.to_string().contains("has no column `w` (columns: x, y, z)"), "{e}");
 }
+
+#[test]
+fn the_plans_feed_forward_is_tangent_and_centripetal() {
+    let yaml = mirror_plan("").replace("record: [", "record: [pv: plan.pv, pa: plan.pa, qv: plan.qv, qa: plan.qa, ");
+    let trace = run(&yaml);
+    let col = |n: &str| trace.column(n).unwrap().to_vec();
+    let (f1, f2, px, py, qx, qy) = (col("f1"), col("f2"), col("p[1]"), col("p[2]"), col("q[1]"), col("q[2]"));
+    let (vx, vy, ax, ay) = (col("pv[1]"), col("pv[2]"), col("pa[1]"), col("pa[2]"));
+    let (wx, wy, bx, by) = (col("qv[1]"), col("qv[2]"), col("qa[1]"), col("qa[2]"));
+    for k in 0..f1.len() {
+        // |v| is the feed, along the arc (perpendicular to the radius).
+        assert!(((vx[k] * vx[k] + vy[k] * vy[k]).sqrt() - f1[k]).abs() < 1e-9);
+        assert!(((wx[k] * wx[k] + wy[k] * wy[k]).sqrt() - f2[k]).abs() < 1e-9);
+        let (r1, r2) = ((px[k] * px[k] + py[k] * py[k]).sqrt(), (qx[k] * qx[k] + qy[k] * qy[k]).sqrt());
+        assert!((vx[k] * px[k] + vy[k] * py[k]).abs() < 1e-6 * r1 * (1.0 + f1[k]));
+        // The radial acceleration is centripetal: −f²/ρ.
+        let radial1 = (ax[k] * px[k] + ay[k] * py[k]) / r1;
+        let radial2 = (bx[k] * qx[k] + by[k] * qy[k]) / r2;
+        assert!((radial1 + f1[k] * f1[k] / 400.0).abs() < 1e-4 * (1.0 + f1[k] * f1[k] / 400.0), "k {k}: {radial1}");
+        assert!((radial2 + f2[k] * f2[k] / 500.0).abs() < 1e-4 * (1.0 + f2[k] * f2[k] / 500.0), "k {k}: {radial2}");
+    }
+}

@@ -23,8 +23,10 @@ pub const MIRROR_FEED_PLAN: BlockType = BlockType {
           same periods and finish together. If f2 exceeds `support_feed` (or its rate of change \
           `support_accel`), the machining side's maximum feed is lowered and the plan made again — the \
           paper's loop — by the fraction `reduce`, or at once by the worst excess ratio when that asks \
-          for more (the support feed scales with the machining feed). Outputs, every Tc from t = 0: u, f1, f2, λ, the \
-          points p = P(u) and q = S(u) (held after the end).",
+          for more (the support feed scales with the machining feed). Outputs, every Tc from t = 0: u, \
+          f1, f2, λ, the points p = P(u) and q = S(u), and for the servos' feed-forward each side's \
+          commanded velocity f·T and acceleration ḟ·T + f²·κN (T the unit tangent, κN = (P″ − (P″·T)·T) \
+          / |P′|² the curvature vector; ḟ2 by central differences), held after the end.",
     inputs: &[],
     outputs: &[
         PortDoc { name: "u", doc: "path parameter" },
@@ -33,6 +35,10 @@ pub const MIRROR_FEED_PLAN: BlockType = BlockType {
         PortDoc { name: "lambda", doc: "feed ratio f2/f1" },
         PortDoc { name: "p", doc: "machining tool-tip point P(u)" },
         PortDoc { name: "q", doc: "support point S(u)" },
+        PortDoc { name: "pv", doc: "machining velocity command f1·T (for feed-forward)" },
+        PortDoc { name: "pa", doc: "machining acceleration command a1·T + f1²·κN" },
+        PortDoc { name: "qv", doc: "support velocity command f2·T_S" },
+        PortDoc { name: "qa", doc: "support acceleration command ḟ2·T_S + f2²·κN_S" },
     ],
     params: &[
         param("points", None, "machining path points (or curve, range, samples as bspline_path)"),
@@ -66,6 +72,14 @@ pub struct SyncPlan {
     pub lambda: Vec<f64>,
     pub p: Vec<f64>,
     pub q: Vec<f64>,
+    /// The commanded velocity and acceleration vectors of both sides, for
+    /// the servos' feed-forward.
+    pub pv: Vec<f64>,
+    pub pa: Vec<f64>,
+    pub qv: Vec<f64>,
+    pub qa: Vec<f64>,
+    /// The machining side's tangential acceleration.
+    pub a1: Vec<f64>,
     pub dim: usize,
     /// The machining side's maximum feed the plan ended with, and the
     /// number of re-plans it took.
@@ -132,6 +146,11 @@ pub fn plan(path: &BSpline, support: &BSpline, limits: SyncLimits) -> Result<Syn
             lambda: Vec::new(),
             p: Vec::new(),
             q: Vec::new(),
+            pv: Vec::new(),
+            pa: Vec::new(),
+            qv: Vec::new(),
+            qa: Vec::new(),
+            a1: Vec::new(),
             dim,
             feed,
             replans,
@@ -141,6 +160,7 @@ pub fn plan(path: &BSpline, support: &BSpline, limits: SyncLimits) -> Result<Syn
             let [_, f1, a1] = profile.at(j as f64 * limits.tc);
             plan.u.push(u);
             plan.f1.push(f1);
+            plan.a1.push(a1);
             path.eval(u, &mut a);
             plan.p.extend_from_slice(&a[..dim]);
             support.eval(u, &mut b);
@@ -166,12 +186,39 @@ pub fn plan(path: &BSpline, support: &BSpline, limits: SyncLimits) -> Result<Syn
         let rate_peak = plan.f2.windows(2).map(|w| (w[1] - w[0]).abs() / limits.tc).fold(0.0, f64::max);
         let excess = (f2_peak / limits.support_feed).max(rate_peak / limits.support_accel);
         if excess <= 1.0 + 1e-12 {
+            feed_forward(&mut plan, path, support, limits.tc);
             return Ok(plan);
         }
         // Lower by `reduce`, or at once by the excess when that is more
         // (the feeds scale with the machining feed).
         feed *= (1.0 - limits.reduce).min(1.0 / excess);
         replans += 1;
+    }
+}
+
+/// The commanded velocity f·T and acceleration ḟ·T + f²·κN of both sides
+/// at every period: T = P′/|P′|, κN = (P″ − (P″·T)·T)/|P′|² (the
+/// curvature vector); the support side's ḟ2 by central differences.
+fn feed_forward(plan: &mut SyncPlan, path: &BSpline, support: &BSpline, tc: f64) {
+    let (dim, n) = (plan.dim, plan.u.len());
+    let mut d = vec![0.0; 3 * dim];
+    for j in 0..n {
+        let (before, after) = (j.saturating_sub(1), (j + 1).min(n - 1));
+        let df2 = (plan.f2[after] - plan.f2[before]) / ((after - before).max(1) as f64 * tc);
+        for (curve, f, df, v, a) in [
+            (path, plan.f1[j], plan.a1[j], &mut plan.pv, &mut plan.pa),
+            (support, plan.f2[j], df2, &mut plan.qv, &mut plan.qa),
+        ] {
+            curve.eval(plan.u[j], &mut d);
+            let (d1, d2) = (&d[dim..2 * dim], &d[2 * dim..]);
+            let speed = norm(d1);
+            let along: f64 = d1.iter().zip(d2).map(|(x, y)| x * y).sum::<f64>() / speed;
+            for c in 0..dim {
+                let t = d1[c] / speed;
+                v.push(f * t);
+                a.push(df * t + f * f * (d2[c] - along * t) / (speed * speed));
+            }
+        }
     }
 }
 
@@ -205,6 +252,9 @@ impl Block for MirrorFeedPlan {
         io.set(3, plan.lambda[j]);
         io.output(4).copy_from_slice(&plan.p[j * dim..(j + 1) * dim]);
         io.output(5).copy_from_slice(&plan.q[j * dim..(j + 1) * dim]);
+        for (k, v) in [&plan.pv, &plan.pa, &plan.qv, &plan.qa].into_iter().enumerate() {
+            io.output(6 + k).copy_from_slice(&v[j * dim..(j + 1) * dim]);
+        }
     }
 
     fn build_report(&self) -> Option<String> {
@@ -260,6 +310,8 @@ fn build_mirror_feed_plan(p: &mut Params) -> Result<Built, Diagnostic> {
     for name in ["u", "f1", "f2", "lambda"] {
         iface = iface.output(name, Width::Fixed(1));
     }
-    let iface = iface.output("p", Width::Fixed(dim)).output("q", Width::Fixed(dim));
+    for name in ["p", "q", "pv", "pa", "qv", "qa"] {
+        iface = iface.output(name, Width::Fixed(dim));
+    }
     Ok(Built::new(MirrorFeedPlan { plan, tc, offset }, iface))
 }
