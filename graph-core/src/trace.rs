@@ -4,18 +4,23 @@
 
 use crate::checks::{Check, CheckResult};
 use crate::compile::{Column, Model};
-use crate::sim::{SimError, Simulator};
+use crate::sim::{RunStats, SimError, Simulator};
 
 /// Runs a model to its stop time (or `stop`) and returns the recorded
 /// signals in memory.
 pub fn simulate(model: Model, stop: Option<f64>) -> Result<Trace, SimError> {
+    simulate_with_stats(model, stop).map(|(trace, _)| trace)
+}
+
+/// [`simulate`], with the run's step, solver and event counts.
+pub fn simulate_with_stats(model: Model, stop: Option<f64>) -> Result<(Trace, RunStats), SimError> {
     let mut sim = Simulator::new(model, stop);
     let mut recorder = Recorder::new(sim.model());
     let mut trace = Trace::new(sim.model().headers());
     trace.loop_figures = sim.model().loop_figures.clone();
-    sim.run(&mut |t, signals| recorder.sample(t, signals, &mut |row| trace.push(row)))?;
+    let stats = sim.run(&mut |t, signals| recorder.sample(t, signals, &mut |row| trace.push(row)))?;
     recorder.flush(&mut |row| trace.push(row));
-    Ok(trace)
+    Ok((trace, stats))
 }
 
 /// Turns signal buffers into rows `[t, col1, col2, …]`, every `every`-th

@@ -3,7 +3,7 @@
 //! back. The package `ctlgraph` (ctlgraph/__init__.py) re-exports it.
 
 use ctlgraph::core::checks::CheckResult;
-use ctlgraph::core::trace::{Recorder, Trace};
+use ctlgraph::core::trace::{Trace, simulate_with_stats};
 use ctlgraph::core::{Diagnostic, Model, Simulator, Snapshot as CoreSnapshot};
 use numpy::{PyArray1, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::create_exception;
@@ -177,14 +177,8 @@ impl RunResult {
 fn simulate(model: Model, stop: Option<f64>) -> std::result::Result<(Trace, Vec<CheckResult>, [u64; 5], f64), String> {
     let start = std::time::Instant::now();
     let checks = model.checks.clone();
-    let mut sim = Simulator::new(model, stop);
-    let mut recorder = Recorder::new(sim.model());
-    let mut trace = Trace::new(sim.model().headers());
-    trace.loop_figures = sim.model().loop_figures.clone();
-    sim.run(&mut |t, signals| recorder.sample(t, signals, &mut |row| trace.push(row))).map_err(|e| e.to_string())?;
-    recorder.flush(&mut |row| trace.push(row));
+    let (trace, s) = simulate_with_stats(model, stop).map_err(|e| e.to_string())?;
     let results = checks.iter().map(|c| trace.check(c)).collect();
-    let s = sim.stats();
     let counts = [s.major_steps, s.solver.steps, s.solver.rejected, s.solver.evaluations, s.events];
     Ok((trace, results, counts, start.elapsed().as_secs_f64()))
 }

@@ -291,6 +291,10 @@ fn build_mirror_feed_plan(p: &mut Params) -> Result<Built, Diagnostic> {
     let fit = |pts: &[f64]| BSpline::fit(pts, dim, &params, n_control);
     let path = fit(&points).map_err(|m| p.error("control_points", m))?;
     let support = fit(&support_points).map_err(|m| p.error("support_points", m))?;
+    let st = p.discrete_sample_time()?;
+    let SampleTime::Discrete { period: tc, offset } = st else {
+        return Err(p.error("sample_time", "needs a period Tc > 0"));
+    };
     let positive_or_inf = |v: f64| v > 0.0;
     let limits = SyncLimits {
         feed: p.positive("feed")?,
@@ -299,13 +303,9 @@ fn build_mirror_feed_plan(p: &mut Params) -> Result<Built, Diagnostic> {
         support_feed: p.number_where("support_feed", Some(f64::INFINITY), positive_or_inf, "> 0")?,
         support_accel: p.number_where("support_accel", Some(f64::INFINITY), positive_or_inf, "> 0")?,
         reduce: p.number_where("reduce", Some(0.01), |r| (1e-4..=0.5).contains(&r), "a fraction in [1e-4, 0.5]")?,
-        tc: 0.0,
+        tc,
     };
-    let st = p.discrete_sample_time()?;
-    let SampleTime::Discrete { period: tc, offset } = st else {
-        return Err(p.error("sample_time", "needs a period Tc > 0"));
-    };
-    let plan = plan(&path, &support, SyncLimits { tc, ..limits }).map_err(|m| p.block_error(m))?;
+    let plan = plan(&path, &support, limits).map_err(|m| p.block_error(m))?;
     let mut iface = Interface::new(st);
     for name in ["u", "f1", "f2", "lambda"] {
         iface = iface.output(name, Width::Fixed(1));

@@ -77,7 +77,9 @@ impl Simulator {
                 },
             ));
         };
-        let held = self.model.blocks[block].external_input().expect("an external input block");
+        let Some(held) = self.model.blocks[block].external_input() else {
+            return Err(Diagnostic::plain(format!("input `{name}` holds no value (internal error)")));
+        };
         if held.len() != value.len() {
             return Err(Diagnostic::plain(format!(
                 "input `{name}` has {} element(s), given {}",
@@ -128,7 +130,7 @@ impl Simulator {
     /// The present value of output `name` (a top-level `outport`).
     pub fn output(&mut self, name: &str) -> Result<&[f64], Diagnostic> {
         self.refresh().map_err(|e| Diagnostic::plain(e.to_string()))?;
-        let Some((_, port)) = self.model.external_outputs.iter().find(|(n, _)| n == name) else {
+        let Some(port) = self.external_output(name) else {
             return Err(Diagnostic::plain(format!("no output `{name}`"))
                 .suggest(name, self.output_names())
                 .or_hint("the graph's outputs are its top-level `outport` blocks"));
@@ -136,17 +138,22 @@ impl Simulator {
         Ok(&self.signals[port.offset..port.offset + port.width])
     }
 
+    fn external_output(&self, name: &str) -> Option<crate::block::Port> {
+        self.model.external_outputs.iter().find(|(n, _)| n == name).map(|(_, port)| *port)
+    }
+
     /// The present value of any signal: a recorded name, `block`,
     /// `block.port`, `sub.port` of a subsystem, with `[k]` for one element.
     pub fn signal(&mut self, name: &str) -> Result<&[f64], Diagnostic> {
         self.refresh().map_err(|e| Diagnostic::plain(e.to_string()))?;
-        if let Some(c) = self.model.columns.iter().find(|c| c.name == name) {
-            return Ok(&self.signals[c.offset..c.offset + c.width]);
-        }
-        if let Some((_, port)) = self.model.external_outputs.iter().find(|(n, _)| n == name) {
-            return Ok(&self.signals[port.offset..port.offset + port.width]);
-        }
-        let port = self.model.signal_port(name)?;
+        let recorded = self.model.columns.iter().find(|c| c.name == name);
+        let port = match recorded.map(|c| crate::block::Port { offset: c.offset, width: c.width }) {
+            Some(port) => port,
+            None => match self.external_output(name) {
+                Some(port) => port,
+                None => self.model.signal_port(name)?,
+            },
+        };
         Ok(&self.signals[port.offset..port.offset + port.width])
     }
 
