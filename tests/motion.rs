@@ -308,5 +308,23 @@ fn the_plans_feed_forward_is_tangent_and_centripetal() {
         let radial2 = (bx[k] * qx[k] + by[k] * qy[k]) / r2;
         assert!((radial1 + f1[k] * f1[k] / 400.0).abs() < 1e-4 * (1.0 + f1[k] * f1[k] / 400.0), "k {k}: {radial1}");
         assert!((radial2 + f2[k] * f2[k] / 500.0).abs() < 1e-4 * (1.0 + f2[k] * f2[k] / 500.0), "k {k}: {radial2}");
+        // Tangentially, ḟ2 = λ·ḟ1 with λ = 1.25 on concentric arcs (0 at rest).
+        let (tangential1, tangential2) = ((ay[k] * px[k] - ax[k] * py[k]) / r1, (by[k] * qx[k] - bx[k] * qy[k]) / r2);
+        assert!((tangential2 - 1.25 * tangential1).abs() < 1e-3 * (1.0 + tangential1.abs()), "k {k}");
     }
+}
+
+#[test]
+fn a_plan_that_starts_later_is_the_same_plan_shifted() {
+    // 0.1 s = 50 periods: both sides hold their first points until then.
+    let now = run(&mirror_plan(""));
+    let later = run(&mirror_plan(", start: 0.1"));
+    let shift = 50;
+    for name in ["u", "f1", "f2", "p[1]", "q[2]"] {
+        let (a, b) = (now.column(name).unwrap(), later.column(name).unwrap());
+        assert!(b[..=shift].iter().all(|&v| v == a[0]), "{name} held before the start");
+        assert_eq!(&b[shift..], &a[..a.len() - shift], "{name} shifted by 50 periods");
+    }
+    let e = error(&mirror_plan(", start: 0.003"));
+    assert!(e.to_string().contains("not a whole number of periods of 0.002 s"), "{e}");
 }

@@ -133,11 +133,13 @@ fn stepping_allocates_nothing() {
     assert_eq!(allocations_while_stepping("{ method: dopri5, max_step: 1.0e-3 }", 5_000), 0, "dopri5");
     // The paper graphs: contact, normal force, impedance, sliding mode, feed
     // drive, reference filter; RLS; the milling force with its tooth events,
-    // chip crossings and delays, and the cascade-realised controller.
+    // chip crossings and delays, and the cascade-realised controller; the
+    // mirror-milling pair (feed plan, servo axes, noise, compensation).
     let graphs = [
         ("graphs/contact-force/compare.yaml", 1_500),
         ("graphs/contact-force/identify.yaml", 1_500),
         ("graphs/milling/compare.yaml", 12_000),
+        ("graphs/mirror-milling/compensation.yaml", 4_000),
     ];
     for (graph, steps) in graphs {
         let model = ctlgraph::compile_file(graph.as_ref(), &[]).unwrap_or_else(|d| panic!("{d}"));

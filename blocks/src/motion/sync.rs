@@ -23,10 +23,12 @@ pub const MIRROR_FEED_PLAN: BlockType = BlockType {
           same periods and finish together. If f2 exceeds `support_feed` (or its rate of change \
           `support_accel`), the machining side's maximum feed is lowered and the plan made again — the \
           paper's loop — by the fraction `reduce`, or at once by the worst excess ratio when that asks \
-          for more (the support feed scales with the machining feed). Outputs, every Tc from t = 0: u, \
+          for more (the support feed scales with the machining feed). Outputs, every Tc: u, \
           f1, f2, λ, the points p = P(u) and q = S(u), and for the servos' feed-forward each side's \
           commanded velocity f·T and acceleration ḟ·T + f²·κN (T the unit tangent, κN = (P″ − (P″·T)·T) \
-          / |P′|² the curvature vector; ḟ2 by central differences), held after the end.",
+          / |P′|² the curvature vector; ḟ2 = λ·ḟ1 + f1·λ̇, λ̇ by central differences), held after the end. With `start`, \
+          both sides hold their first points (at rest) until then — time for a real-time compensation \
+          to settle before the motion.",
     inputs: &[],
     outputs: &[
         PortDoc { name: "u", doc: "path parameter" },
@@ -59,6 +61,7 @@ pub const MIRROR_FEED_PLAN: BlockType = BlockType {
         param("support_accel", Some("inf"), "support side's maximum |df2/dt|"),
         param("reduce", Some("0.01"), "fraction the machining feed limit is lowered by per re-plan, 1e-4 … 0.5"),
         param("sample_time", None, "interpolation period Tc [s] (required)"),
+        param("start", Some("0"), "time the motion begins [s], a whole number of periods Tc"),
     ],
     build: build_mirror_feed_plan,
 };
@@ -198,13 +201,16 @@ pub fn plan(path: &BSpline, support: &BSpline, limits: SyncLimits) -> Result<Syn
 
 /// The commanded velocity f·T and acceleration ḟ·T + f²·κN of both sides
 /// at every period: T = P′/|P′|, κN = (P″ − (P″·T)·T)/|P′|² (the
-/// curvature vector); the support side's ḟ2 by central differences.
+/// curvature vector); the support side's ḟ2 = λ·ḟ1 + f1·λ̇ with λ̇ by
+/// central differences.
 fn feed_forward(plan: &mut SyncPlan, path: &BSpline, support: &BSpline, tc: f64) {
     let (dim, n) = (plan.dim, plan.u.len());
     let mut d = vec![0.0; 3 * dim];
     for j in 0..n {
         let (before, after) = (j.saturating_sub(1), (j + 1).min(n - 1));
-        let df2 = (plan.f2[after] - plan.f2[before]) / ((after - before).max(1) as f64 * tc);
+        // ḟ2 = λ·ḟ1 + f1·λ̇: exact where λ is constant, and zero at rest.
+        let dlambda = (plan.lambda[after] - plan.lambda[before]) / ((after - before).max(1) as f64 * tc);
+        let df2 = plan.lambda[j] * plan.a1[j] + plan.f1[j] * dlambda;
         for (curve, f, df, v, a) in [
             (path, plan.f1[j], plan.a1[j], &mut plan.pv, &mut plan.pa),
             (support, plan.f2[j], df2, &mut plan.qv, &mut plan.qa),
@@ -234,7 +240,8 @@ fn norm(v: &[f64]) -> f64 {
 struct MirrorFeedPlan {
     plan: SyncPlan,
     tc: f64,
-    offset: f64,
+    /// The sample-time offset plus `start`: the time of the plan's period 0.
+    begin: f64,
 }
 
 impl Block for MirrorFeedPlan {
@@ -244,7 +251,7 @@ impl Block for MirrorFeedPlan {
 
     fn output(&mut self, io: &mut Io) {
         let plan = &self.plan;
-        let j = (((io.t - self.offset) / self.tc).round().max(0.0) as usize).min(plan.u.len() - 1);
+        let j = (((io.t - self.begin) / self.tc).round().max(0.0) as usize).min(plan.u.len() - 1);
         let dim = plan.dim;
         io.set(0, plan.u[j]);
         io.set(1, plan.f1[j]);
@@ -305,6 +312,11 @@ fn build_mirror_feed_plan(p: &mut Params) -> Result<Built, Diagnostic> {
         reduce: p.number_where("reduce", Some(0.01), |r| (1e-4..=0.5).contains(&r), "a fraction in [1e-4, 0.5]")?,
         tc,
     };
+    let start = p.number_where("start", Some(0.0), |s| (0.0..1e9).contains(&s), ">= 0 and < 1e9")?;
+    let periods = start / tc;
+    if (periods - periods.round()).abs() > 1e-9 * periods.max(1.0) {
+        return Err(p.error("start", format!("{start} s is not a whole number of periods of {tc} s")));
+    }
     let plan = plan(&path, &support, limits).map_err(|m| p.block_error(m))?;
     let mut iface = Interface::new(st);
     for name in ["u", "f1", "f2", "lambda"] {
@@ -313,5 +325,5 @@ fn build_mirror_feed_plan(p: &mut Params) -> Result<Built, Diagnostic> {
     for name in ["p", "q", "pv", "pa", "qv", "qa"] {
         iface = iface.output(name, Width::Fixed(dim));
     }
-    Ok(Built::new(MirrorFeedPlan { plan, tc, offset }, iface))
+    Ok(Built::new(MirrorFeedPlan { plan, tc, begin: offset + periods.round() * tc }, iface))
 }

@@ -336,6 +336,13 @@ mod tests {
             d.message,
             "check: `max_abs` takes a recorded signal first: `k` is a parameter, not a recorded signal"
         );
+        // An expression of signals where one signal belongs: say so, not "did you mean".
+        let d = err("max_abs(y - e) < 1");
+        assert_eq!(
+            d.message,
+            "check: `max_abs` takes a recorded signal first: a signal's name alone, not an expression of signals"
+        );
+        assert!(d.hint.unwrap().starts_with("record the expression as a signal of its own"));
         // max/min of numbers stay the built-ins.
         assert!(compile(&[spec("max(k, 1) < 3")], &headers, &[("k".into(), 1.0)], false).is_ok());
         let d = err("final_value(y) = 1");

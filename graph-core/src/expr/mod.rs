@@ -530,6 +530,10 @@ impl Parser<'_> {
                 Some(TokKind::Name(arg)) if self.scope.lookup(arg).is_some() => {
                     (format!("`{arg}` is a parameter, not a recorded signal"), None)
                 }
+                Some(TokKind::Name(arg)) if signals.iter().any(|s| s == arg) => (
+                    "a signal's name alone, not an expression of signals".to_string(),
+                    Some("record the expression as a signal of its own (a `sum` or `fcn` block) and name that".into()),
+                ),
                 Some(TokKind::Name(arg)) => (
                     format!("`{arg}` is not a recorded signal"),
                     crate::diag::closest(arg, signals.iter().map(String::as_str))

@@ -24,6 +24,12 @@ pub enum SimError {
     Host(String),
 }
 
+/// A value as Rust prints it, but in exponent form when that would be a
+/// long run of digits (a diverging state reaches 1e150).
+fn readable(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-6..1e15).contains(&v.abs()) { format!("{v:e}") } else { v.to_string() }
+}
+
 impl fmt::Display for SimError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -31,7 +37,7 @@ impl fmt::Display for SimError {
                 write!(f, "t = {t}: block `{block}`: {what} is {value}")?;
                 if !inputs.is_empty() {
                     let shown: Vec<String> =
-                        inputs.iter().take(MAX_INPUTS_SHOWN).map(|(n, v)| format!("{n} = {v}")).collect();
+                        inputs.iter().take(MAX_INPUTS_SHOWN).map(|(n, v)| format!("{n} = {}", readable(*v))).collect();
                     let more = inputs.len().saturating_sub(MAX_INPUTS_SHOWN);
                     let more = if more > 0 { format!(" and {more} more") } else { String::new() };
                     write!(f, " (inputs: {}{more})", shown.join(", "))?;
@@ -62,3 +68,19 @@ impl std::error::Error for SimError {}
 
 /// Input values a non-finite message lists (a wide vector input is cut short).
 const MAX_INPUTS_SHOWN: usize = 8;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn huge_and_tiny_inputs_are_shown_with_an_exponent() {
+        let inputs = vec![("u1".into(), -1.3205514427584226e150), ("u2".into(), 2.5), ("u3".into(), 3e-9)];
+        let e =
+            SimError::NonFinite { t: 1.5, block: "b".into(), what: "output `y`".into(), value: f64::INFINITY, inputs };
+        assert_eq!(
+            e.to_string(),
+            "t = 1.5: block `b`: output `y` is inf (inputs: u1 = -1.3205514427584226e150, u2 = 2.5, u3 = 3e-9)"
+        );
+    }
+}
