@@ -11,6 +11,7 @@
 pub mod analysis;
 pub mod diagram;
 pub mod dot;
+pub mod html;
 pub mod plot;
 pub mod prop;
 pub mod record;

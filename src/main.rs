@@ -4,6 +4,7 @@
 mod analysis_cmd;
 mod interrupt;
 mod progress;
+mod report_cmd;
 mod run_cmd;
 mod sweep_cmd;
 
@@ -63,6 +64,9 @@ enum Command {
         /// Write a machine-readable run report (JSON).
         #[arg(long)]
         report: Option<PathBuf>,
+        /// Write a self-contained HTML report: diagram, interactive plots, checks, solver, provenance.
+        #[arg(long, value_name = "FILE.html")]
+        html: Option<PathBuf>,
         /// Override `simulation.seed` (noise realisations).
         #[arg(long)]
         seed: Option<u64>,
@@ -122,6 +126,19 @@ enum Command {
         /// Override a graph parameter (repeatable).
         #[arg(long = "set", value_name = "NAME=VALUE")]
         sets: Vec<String>,
+    },
+    /// The HTML report of an earlier run, from its CSV (`run --out`) and JSON report (`run --report`).
+    #[command(after_help = "Example:\n  ctlgraph run graphs/fladrc/compare.yaml --out run.csv --report run.json\n  \
+                      ctlgraph report run.csv --json run.json --html report.html")]
+    Report {
+        /// The recorded signals (CSV written by `run --out`).
+        csv: PathBuf,
+        /// The run's JSON report (written by `run --report`): graph, parameters set, seed, checks, statistics.
+        #[arg(long, value_name = "FILE.json")]
+        json: PathBuf,
+        /// Where to write the HTML report.
+        #[arg(long, value_name = "FILE.html")]
+        html: PathBuf,
     },
     /// Print the graph as Graphviz dot.
     #[command(
@@ -193,13 +210,14 @@ fn main() -> ExitCode {
     interrupt::quiet_on_closed_pipe();
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run { graph, out, plot, sets, stop_time, report, seed, max_steps, max_wall } => run_cmd::run(
+        Command::Run { graph, out, plot, sets, stop_time, report, html, seed, max_steps, max_wall } => run_cmd::run(
             &graph,
             RunOptions {
                 out: out.as_deref(),
                 plot: plot.as_deref(),
                 stop_time,
                 report: report.as_deref(),
+                html: html.as_deref(),
                 seed,
                 max_steps,
                 max_wall,
@@ -219,6 +237,7 @@ fn main() -> ExitCode {
         Command::Poles { select } => analysis_cmd::poles(select),
         Command::Dot { graph, sets } => compile(&graph, &sets).map(|m| print!("{}", ctlgraph::dot::to_dot(&m))),
         Command::Diagram { graph, svg, expand, sets } => diagram(&graph, &svg, expand, &sets),
+        Command::Report { csv, json, html } => report_cmd::report(&csv, &json, &html),
         Command::Blocks { markdown: true, .. } => {
             print!("{}", ctlgraph::reference::markdown(&ctlgraph::registry()));
             Ok(())

@@ -36,19 +36,27 @@ const PANEL_HEIGHT: u32 = 220;
 const WIDTH: u32 = 1000;
 
 /// One panel to draw: its trace columns and how to draw them.
-struct Panel {
-    title: Option<String>,
-    columns: Vec<usize>,
-    y_desc: String,
-    y_limits: Option<[f64; 2]>,
-    window: Option<[f64; 2]>,
-    band: Option<[f64; 2]>,
+pub struct Panel {
+    pub title: Option<String>,
+    /// Indices into the trace's columns (never 0, the time).
+    pub columns: Vec<usize>,
+    /// The y axis' label, with its unit.
+    pub y_desc: String,
+    pub y_limits: Option<[f64; 2]>,
+    pub window: Option<[f64; 2]>,
+    pub band: Option<[f64; 2]>,
+}
+
+/// The panels of `scopes`, or without them one per recorded name
+/// (comparisons and vector elements sharing one).
+pub fn panels(trace: &Trace, scopes: &[Scope], columns: &[Column]) -> Vec<Panel> {
+    if scopes.is_empty() { default_panels(trace, columns) } else { scope_panels(trace, scopes, columns) }
 }
 
 /// Renders `trace` as an SVG document titled `title`: the panels of
 /// `scopes`, or one per recorded name; `columns` give the units.
 pub fn render_svg(trace: &Trace, title: &str, scopes: &[Scope], columns: &[Column]) -> Result<String, String> {
-    let panels = if scopes.is_empty() { default_panels(trace, columns) } else { scope_panels(trace, scopes, columns) };
+    let panels = panels(trace, scopes, columns);
     if panels.is_empty() {
         return Err("nothing recorded to plot".into());
     }

@@ -5,6 +5,7 @@
 
 use crate::interrupt;
 use crate::progress::Progress;
+use ctlgraph::html::Report;
 use ctlgraph::record::{CsvFile, Number, Recorder, Trace, write_atomic};
 use ctlgraph::report::{RunInfo, to_json};
 use ctlgraph::suite::Failure;
@@ -19,6 +20,7 @@ pub(crate) struct RunOptions<'a> {
     pub plot: Option<&'a Path>,
     pub stop_time: Option<f64>,
     pub report: Option<&'a Path>,
+    pub html: Option<&'a Path>,
     pub seed: Option<u64>,
     pub max_steps: Option<u64>,
     pub max_wall: Option<f64>,
@@ -60,10 +62,11 @@ fn validate(graph: &Path, opts: &RunOptions) -> Result<(), Failure> {
     }
     // An output must not overwrite the graph or another output.
     let same = |a: &Path, b: &Path| a == b || a.canonicalize().ok().is_some_and(|x| b.canonicalize().ok() == Some(x));
-    let outputs: Vec<(&str, &Path)> = [("--out", opts.out), ("--plot", opts.plot), ("--report", opts.report)]
-        .into_iter()
-        .filter_map(|(f, p)| p.map(|p| (f, p)))
-        .collect();
+    let outputs: Vec<(&str, &Path)> =
+        [("--out", opts.out), ("--plot", opts.plot), ("--report", opts.report), ("--html", opts.html)]
+            .into_iter()
+            .filter_map(|(f, p)| p.map(|p| (f, p)))
+            .collect();
     for (i, (flag, p)) in outputs.iter().enumerate() {
         if same(p, graph) {
             return Err(Diagnostic::plain(format!("{flag} {}: that is the graph file", p.display())).into());
@@ -110,7 +113,7 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
         Some(path) => Some(CsvFile::create(path, &headers).map_err(io_error(path))?),
         None => None,
     };
-    let keep_trace = opts.plot.is_some() || !checks.is_empty() || to_stdout;
+    let keep_trace = opts.plot.is_some() || opts.html.is_some() || !checks.is_empty() || to_stdout;
     let mut trace =
         keep_trace.then(|| Trace { loop_figures: sim.model().loop_figures.clone(), ..Trace::new(headers.clone()) });
     let mut recorder = Recorder::new(sim.model());
@@ -171,7 +174,7 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
     };
     // The outputs: whole files, for what was simulated (up to the last
     // complete major step when the run ended early).
-    if let Some(path) = opts.report {
+    if opts.report.is_some() || opts.html.is_some() {
         let bytes = std::fs::read(graph).unwrap_or_default();
         let info = RunInfo {
             graph: &graph.display().to_string(),
@@ -191,8 +194,17 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
             parameters: &sim.model().parameters,
             overrides: &sets,
         };
-        let text = serde_json::to_string_pretty(&to_json(&info)).unwrap_or_default();
-        write_atomic(path, text.as_bytes()).map_err(io_error(path))?;
+        let json = to_json(&info);
+        if let Some(path) = opts.report {
+            let text = serde_json::to_string_pretty(&json).unwrap_or_default();
+            write_atomic(path, text.as_bytes()).map_err(io_error(path))?;
+        }
+        if let (Some(path), Some(tr)) = (opts.html, &trace) {
+            let flat = ctlgraph_core::load(graph, &sets)?;
+            let page =
+                ctlgraph::html::render(&Report { run: &json, trace: tr, flat: &flat, model: sim.model(), notes: &[] });
+            write_atomic(path, page.as_bytes()).map_err(io_error(path))?;
+        }
     }
     if let (Some(c), Some(path)) = (csv, opts.out) {
         c.commit().map_err(io_error(path))?;
@@ -214,7 +226,7 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
     } else {
         print!("{report}");
     }
-    let written = [opts.out.filter(|_| !to_stdout), opts.plot, opts.report].into_iter().flatten().count();
+    let written = [opts.out.filter(|_| !to_stdout), opts.plot, opts.report, opts.html].into_iter().flatten().count();
     let kept = if written > 0 { format!("; the outputs hold the run to t = {last_step}") } else { String::new() };
     match (result, cut) {
         (Err(e), _) => Err(Failure::Run(format!("{e}{kept}"))),
