@@ -368,6 +368,7 @@ pub fn to_svg(d: &Diagram) -> String {
     s
 }
 
-fn esc(text: &str) -> String {
+/// Text escaped for XML and HTML content and attribute values.
+pub(crate) fn esc(text: &str) -> String {
     text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }

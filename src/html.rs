@@ -11,7 +11,7 @@
 //! arrays: time as 64-bit floats, signals as 32-bit floats (7 significant
 //! digits, a third of the size of text).
 
-use crate::diagram;
+use crate::diagram::{self, esc};
 use crate::plot;
 use crate::record::Trace;
 use base64::Engine;
@@ -294,8 +294,4 @@ fn number(v: &Value) -> String {
         Some(x) => format!("{}", (x * 1e6).round() / 1e6),
         None => "—".into(),
     }
-}
-
-fn esc(text: &str) -> String {
-    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }

@@ -1,5 +1,5 @@
 //! The HTML report in a real browser: Debian's headless Chromium, started
-//! by this test and driven over the DevTools protocol (headless_chrome).
+//! by this test and driven over the DevTools protocol (tests/cdp).
 //! It opens the report of the FLADRC comparison and checks that the
 //! diagram shows every block, that dragging across a plot zooms every
 //! linked panel's time axis, that the cursor shows values, that clicking a
@@ -7,15 +7,15 @@
 //! target/test-artifacts/. Chromium is required, not optional (see
 //! [`chromium`]); CHROMIUM names another binary.
 
+#![cfg(unix)]
+
+mod cdp;
 mod common;
+use cdp::Chromium;
 use common::{ctlgraph, text};
-use headless_chrome::protocol::cdp::{Input, Page};
-use headless_chrome::{Browser, LaunchOptions, Tab};
 use serde_json::Value;
 use std::collections::BTreeSet;
-use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
 const GRAPH: &str = "graphs/fladrc/compare.yaml";
 
@@ -44,48 +44,16 @@ fn chromium() -> PathBuf {
     path
 }
 
-fn js(tab: &Tab, expression: &str) -> Value {
-    let result = tab.evaluate(expression, false).unwrap_or_else(|e| panic!("{expression}: {e}"));
-    result.value.unwrap_or(Value::Null)
-}
-
-fn mouse(tab: &Tab, kind: Input::DispatchMouseEventTypeOption, (x, y): (f64, f64), shift: bool) {
-    let pressed = !matches!(kind, Input::DispatchMouseEventTypeOption::MouseReleased);
-    tab.call_method(Input::DispatchMouseEvent {
-        Type: kind,
-        x,
-        y,
-        modifiers: shift.then_some(8),
-        timestamp: None,
-        button: Some(Input::MouseButton::Left),
-        buttons: Some(u32::from(pressed)),
-        click_count: Some(1),
-        force: None,
-        tangential_pressure: None,
-        tilt_x: None,
-        tilt_y: None,
-        twist: None,
-        delta_x: None,
-        delta_y: None,
-        pointer_Type: None,
-    })
-    .unwrap();
-}
-
 /// The time view of panel `k`, as the page shows it.
-fn view(tab: &Tab, k: usize) -> (f64, f64) {
-    let v = js(tab, &format!("JSON.stringify(window.ctlgraphReport.view({k}))"));
-    let pair: Vec<f64> = serde_json::from_str(v.as_str().unwrap()).unwrap();
-    (pair[0], pair[1])
+fn view(page: &mut Chromium, k: usize) -> (f64, f64) {
+    let v = page.eval(&format!("window.ctlgraphReport.view({k})"));
+    (v[0].as_f64().unwrap(), v[1].as_f64().unwrap())
 }
 
 /// Names of the diagram's boxes in one of its two views.
-fn boxes(tab: &Tab, view: &str) -> BTreeSet<String> {
-    let v = js(
-        tab,
-        &format!("JSON.stringify([...document.querySelectorAll('#diagram-{view} g.block')].map(g => g.dataset.name))"),
-    );
-    serde_json::from_str(v.as_str().unwrap()).unwrap()
+fn boxes(page: &mut Chromium, view: &str) -> BTreeSet<String> {
+    let v = page.eval(&format!("[...document.querySelectorAll('#diagram-{view} g.block')].map(g => g.dataset.name)"));
+    serde_json::from_value(v).unwrap()
 }
 
 #[test]
@@ -98,52 +66,27 @@ fn the_report_works_in_a_browser() {
     let size = std::fs::metadata(&report).unwrap().len();
     assert!(size < 5 << 20, "the report weighs {size} bytes, over 5 MB");
 
-    let user_data = tempfile::tempdir().unwrap();
-    let args: Vec<&OsStr> = [
-        "--disable-gpu",
-        "--disable-quic",
-        "--no-first-run",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--hide-scrollbars",
-    ]
-    .iter()
-    .map(OsStr::new)
-    .collect();
-    let options = LaunchOptions::default_builder()
-        .path(Some(chromium()))
-        .sandbox(false)
-        .window_size(Some((1400, 1000)))
-        .user_data_dir(Some(user_data.path().to_path_buf()))
-        .args(args)
-        .idle_browser_timeout(Duration::from_secs(120))
-        .build()
-        .unwrap();
-    let browser = Browser::new(options).expect("Chromium starts");
-    let tab = browser.new_tab().unwrap();
-    tab.set_default_timeout(Duration::from_secs(30));
-    tab.navigate_to(&format!("file://{}", report.canonicalize().unwrap().display())).unwrap();
-    tab.wait_until_navigated().unwrap();
-    tab.wait_for_element("body[data-ready]").unwrap();
+    let profile = tempfile::tempdir().unwrap();
+    let mut page = Chromium::launch(&chromium(), profile.path(), (1400, 1000));
+    page.open(&format!("file://{}", report.canonicalize().unwrap().display()), "document.body.dataset.ready");
     // Milliseconds from navigation to plots drawn and handlers attached
     // (reported, not asserted: the machines are shared).
-    let ready_ms: f64 = js(&tab, "document.body.dataset.ready").as_str().unwrap().parse().unwrap();
+    let ready_ms: f64 = page.eval("document.body.dataset.ready").as_str().unwrap().parse().unwrap();
 
     // The diagram: every top-level block (subsystems as one box), and
     // expanded every block of the flattened graph, each once.
     let flat = ctlgraph_core::load(Path::new(GRAPH), &[]).unwrap();
     let all: BTreeSet<String> = flat.blocks.iter().map(|b| b.path.clone()).collect();
     let top: BTreeSet<String> = all.iter().map(|p| p.split('/').next().unwrap().to_string()).collect();
-    assert_eq!(boxes(&tab, "collapsed"), top);
-    assert_eq!(boxes(&tab, "expanded"), all);
-    tab.find_element("#expand").unwrap().click().unwrap();
-    assert_eq!(js(&tab, "document.getElementById('diagram-expanded').hidden"), Value::Bool(false));
-    tab.find_element("#expand").unwrap().click().unwrap();
+    assert_eq!(boxes(&mut page, "collapsed"), top);
+    assert_eq!(boxes(&mut page, "expanded"), all);
+    page.click("#expand");
+    assert_eq!(page.eval("document.getElementById('diagram-expanded').hidden"), Value::Bool(false));
+    page.click("#expand");
 
     // Clicking a block shows its parameters as written.
-    tab.find_element("#diagram-collapsed g.block[data-name='d_noise']").unwrap().click().unwrap();
-    let shown = js(&tab, "document.getElementById('block-info').innerText");
+    page.click("#diagram-collapsed g.block[data-name='d_noise'] rect");
+    let shown = page.eval("document.getElementById('block-info').innerText");
     let shown = shown.as_str().unwrap();
     let noise = flat.blocks.iter().find(|b| b.path == "d_noise").unwrap();
     assert!(shown.starts_with("d_noise") && shown.contains("band_limited_white_noise"), "{shown}");
@@ -154,61 +97,62 @@ fn the_report_works_in_a_browser() {
 
     // Dragging across the first plot from 25 % to 50 % of its width zooms
     // to that part of the run, on every panel sharing the time axis.
-    let rect = js(
-        &tab,
+    let rect = page.eval(
         "(() => { const c = document.querySelector('#panel-0 canvas'); c.scrollIntoView(); \
-         const r = c.getBoundingClientRect(); return JSON.stringify([r.left, r.top, r.width, r.height]); })()",
+         const r = c.getBoundingClientRect(); return [r.left, r.top, r.width, r.height]; })()",
     );
-    let r: Vec<f64> = serde_json::from_str(rect.as_str().unwrap()).unwrap();
+    let r: Vec<f64> = serde_json::from_value(rect).unwrap();
     let (left, width) = (r[0] + 72.0, r[2] - 84.0); // the plot area inside the axes' margins
     let y = r[1] + r[3] / 2.0;
-    let before = view(&tab, 0);
+    let before = view(&mut page, 0);
     let at = |f: f64| (left + f * width, y);
-    mouse(&tab, Input::DispatchMouseEventTypeOption::MousePressed, at(0.25), false);
-    mouse(&tab, Input::DispatchMouseEventTypeOption::MouseMoved, at(0.4), false);
-    mouse(&tab, Input::DispatchMouseEventTypeOption::MouseMoved, at(0.5), false);
-    mouse(&tab, Input::DispatchMouseEventTypeOption::MouseReleased, at(0.5), false);
-    let after = view(&tab, 0);
+    page.mouse("mousePressed", at(0.25), false);
+    page.mouse("mouseMoved", at(0.4), false);
+    page.mouse("mouseMoved", at(0.5), false);
+    page.mouse("mouseReleased", at(0.5), false);
+    let after = view(&mut page, 0);
     let span = before.1 - before.0;
     assert!((after.0 - (before.0 + 0.25 * span)).abs() < 0.01 * span, "{before:?} -> {after:?}");
     assert!((after.1 - (before.0 + 0.5 * span)).abs() < 0.01 * span, "{before:?} -> {after:?}");
-    assert_eq!(view(&tab, 1), after, "the second panel's time axis is linked");
+    assert_eq!(view(&mut page, 1), after, "the second panel's time axis is linked");
     // Shift-drag pans by the distance dragged.
-    mouse(&tab, Input::DispatchMouseEventTypeOption::MousePressed, at(0.5), true);
-    mouse(&tab, Input::DispatchMouseEventTypeOption::MouseMoved, at(0.3), true);
-    mouse(&tab, Input::DispatchMouseEventTypeOption::MouseReleased, at(0.3), true);
-    let panned = view(&tab, 0);
+    page.mouse("mousePressed", at(0.5), true);
+    page.mouse("mouseMoved", at(0.3), true);
+    page.mouse("mouseReleased", at(0.3), true);
+    let panned = view(&mut page, 0);
     let zoomed = after.1 - after.0;
     assert!((panned.0 - (after.0 + 0.2 * zoomed)).abs() < 0.01 * zoomed, "{after:?} -> {panned:?}");
     // The cursor shows each signal's value at the time under the mouse.
-    mouse(&tab, Input::DispatchMouseEventTypeOption::MouseMoved, at(0.5), false);
-    std::thread::sleep(Duration::from_millis(100));
-    let values = js(&tab, "[...document.querySelectorAll('#panel-0 .value')].map(v => v.textContent).join(' ')");
+    page.mouse("mouseMoved", at(0.5), false);
+    // (The cursor is drawn at the next animation frame.)
+    let values = page.eval(
+        "new Promise(done => requestAnimationFrame(() => requestAnimationFrame(() => \
+         done([...document.querySelectorAll('#panel-0 .value')].map(v => v.textContent).join(' ')))))",
+    );
     assert!(values.as_str().unwrap().matches("= ").count() >= 2, "cursor values: {values}");
 
     // Clicking a name hides its series.
-    tab.find_element("#panel-0 .legend .item").unwrap().click().unwrap();
+    page.click("#panel-0 .legend .item");
     assert_eq!(
-        js(&tab, "document.querySelector('#panel-0 .legend .item').classList.contains('off')"),
+        page.eval("document.querySelector('#panel-0 .legend .item').classList.contains('off')"),
         Value::Bool(true)
     );
 
     let artifacts = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/test-artifacts");
     std::fs::create_dir_all(&artifacts).unwrap();
-    let png = tab.capture_screenshot(Page::CaptureScreenshotFormatOption::Png, None, None, true).unwrap();
-    std::fs::write(artifacts.join("report.png"), png).unwrap();
+    std::fs::write(artifacts.join("report.png"), page.screenshot()).unwrap();
     println!(
         "report {size} bytes; interactive {ready_ms:.0} ms after navigation; screenshot in {}",
         artifacts.display()
     );
 
-    a_one_sample_spike_survives_the_decimation(&browser, &dir);
+    a_one_sample_spike_survives_the_decimation(&mut page, &dir);
 }
 
 /// 100 001 samples on a plot some 1 300 pixels wide, one of them 1 and
 /// the rest 0: drawn from min and max per pixel column, the spike reaches
 /// the top of the plot at its time, and elsewhere the line stays at 0.
-fn a_one_sample_spike_survives_the_decimation(browser: &Browser, dir: &Path) {
+fn a_one_sample_spike_survives_the_decimation(page: &mut Chromium, dir: &Path) {
     let graph = dir.join("spike.yaml");
     std::fs::write(
         &graph,
@@ -219,15 +163,11 @@ fn a_one_sample_spike_survives_the_decimation(browser: &Browser, dir: &Path) {
     let report = dir.join("spike.html");
     let out = ctlgraph(&["run", graph.to_str().unwrap(), "--html", report.to_str().unwrap()]);
     assert!(out.status.success(), "{}", text(&out.stderr));
-    let tab = browser.new_tab().unwrap();
-    tab.set_default_timeout(Duration::from_secs(30));
-    tab.navigate_to(&format!("file://{}", report.canonicalize().unwrap().display())).unwrap();
-    tab.wait_for_element("body[data-ready]").unwrap();
+    page.open(&format!("file://{}", report.canonicalize().unwrap().display()), "document.body.dataset.ready");
     // The topmost pixel of the series' colour (#0072b2) in the columns
     // around time `at`, as a fraction of the plot's height from its top.
-    let topmost = |at: f64| -> f64 {
-        let v = js(
-            &tab,
+    let mut topmost = |at: f64| -> f64 {
+        let v = page.eval(
             &format!(
                 "(() => {{ const c = document.querySelector('#panel-0 canvas'), d = devicePixelRatio || 1; \
                  const [t0, t1] = window.ctlgraphReport.view(0), pw = c.clientWidth - 84, ph = 240 - 40; \

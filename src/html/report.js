@@ -117,7 +117,7 @@
     let lo = Infinity, hi = -Infinity;
     for (const s of p.series) {
       if (!s.on) continue;
-      for (let i = i0; i < i1; i++) { const v = s.y[i]; if (v < lo) lo = v; if (v > hi) hi = v; }
+      for (let i = i0; i < i1; i++) { const v = s.y[i]; if (!isFinite(v)) continue; if (v < lo) lo = v; if (v > hi) hi = v; }
     }
     if (p.spec.band) { lo = Math.min(lo, p.spec.band[0]); hi = Math.max(hi, p.spec.band[1]); }
     if (!(hi >= lo) || !isFinite(lo) || !isFinite(hi)) return [-1, 1];
