@@ -121,3 +121,15 @@ fn bad_inputs_to_report_are_errors() {
     assert!(text(&out.stderr).contains("not a run report"), "{}", text(&out.stderr));
     assert!(!html.exists(), "no page written");
 }
+
+#[test]
+fn the_reports_the_docs_link_to_are_todays() {
+    // Regenerate with `ctlgraph run graphs/G/compare.yaml --html docs/G-report.html`.
+    let script = std::fs::read_to_string("src/html/report.js").unwrap();
+    let style = std::fs::read_to_string("src/html/report.css").unwrap();
+    for doc in ["fladrc", "contact-force"] {
+        let page = std::fs::read_to_string(format!("docs/{doc}-report.html")).unwrap();
+        assert!(page.contains(&script) && page.contains(&style), "docs/{doc}-report.html is stale");
+        assert!(std::fs::read_to_string(format!("docs/{doc}.md")).unwrap().contains(&format!("({doc}-report.html)")));
+    }
+}
