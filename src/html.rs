@@ -133,23 +133,24 @@ fn panels_json(r: &Report) -> Value {
 /// Per diagram box: its type, parameters as written and recorded columns.
 fn blocks_json(r: &Report, collapsed: &diagram::Diagram, expanded: &diagram::Diagram) -> Value {
     let mut out = serde_json::Map::new();
+    // Each recorded column's block, and the trace headers of a record
+    // (`x[1]`, `x[2]` for a vector).
+    let owners: Vec<(&str, &str)> = r
+        .model
+        .columns
+        .iter()
+        .filter_map(|c| Some((r.model.meta[r.model.signal_owner(c.offset)?.0].name.as_str(), c.name.as_str())))
+        .collect();
     let recorded = |prefix: &str, exact: bool| -> Vec<String> {
-        let offsets: Vec<std::ops::Range<usize>> = r
-            .model
-            .meta
+        let inside = |block: &str| {
+            if exact { block == prefix } else { block.strip_prefix(prefix).is_some_and(|rest| rest.starts_with('/')) }
+        };
+        owners
             .iter()
-            .filter(|m| if exact { m.name == prefix } else { m.name.starts_with(&format!("{prefix}/")) })
-            .map(|m| m.outputs.clone())
-            .collect();
-        let names: Vec<&str> = r
-            .model
-            .columns
-            .iter()
-            .filter(|c| offsets.iter().any(|o| o.contains(&c.offset)))
-            .map(|c| c.name.as_str())
-            .collect();
-        let base = |h: &str| h.split('[').next().unwrap_or(h).to_string();
-        r.trace.headers.iter().skip(1).filter(|h| names.contains(&base(h).as_str())).cloned().collect()
+            .filter(|(block, _)| inside(block))
+            .flat_map(|(_, name)| plot::trace_columns(r.trace, name))
+            .map(|k| r.trace.headers[k].clone())
+            .collect()
     };
     for node in collapsed.nodes.iter().chain(&expanded.nodes) {
         if out.contains_key(&node.name) {

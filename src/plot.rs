@@ -188,7 +188,7 @@ fn common_unit<'a>(names: impl Iterator<Item = &'a str>, columns: &'a [Column]) 
 }
 
 /// Trace columns of record `name` (all elements of a vector).
-fn trace_columns(trace: &Trace, name: &str) -> Vec<usize> {
+pub(crate) fn trace_columns(trace: &Trace, name: &str) -> Vec<usize> {
     let base = |h: &str| h.split('[').next().unwrap_or(h).to_string();
     (1..trace.headers.len()).filter(|&i| base(&trace.headers[i]) == name).collect()
 }

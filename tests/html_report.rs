@@ -62,6 +62,10 @@ fn run_and_report_give_the_same_page_with_the_runs_data() {
         assert!(page.contains(&format!("data-name=\"{top}\"")), "block {top} in the diagram");
         assert!(meta["blocks"][top].is_object(), "block {top} described");
     }
+    // Each block lists the signals recorded from its outputs, and only those.
+    for (block, signals) in [("r", vec!["r"]), ("plant", vec!["y"]), ("ctrl", vec!["u"]), ("err", vec!["e"])] {
+        assert_eq!(meta["blocks"][block]["signals"], serde_json::json!(signals), "block {block}");
+    }
     assert!(page.contains("<tr class=\"pass\">"), "the checks table");
     let sha = ctlgraph::report::sha256_hex(&std::fs::read(graph).unwrap());
     assert!(page.contains(&sha) && page.contains("kp = 3") && page.contains(env!("CARGO_PKG_VERSION")));

@@ -173,8 +173,7 @@ impl Block for TrackingDifferentiator {
 
 fn build_td(p: &mut Params) -> Result<Built, Diagnostic> {
     let delta = p.number_where("delta", None, |v| v > 0.0 && v.is_finite(), "a positive speed factor")?;
-    let st = p.discrete_sample_time()?;
-    let h = st.period().unwrap_or(0.0);
+    let (st, h, _) = p.discrete_clock()?;
     let h0 = p.number_where("h0", Some(2.0 * h), |v| v > 0.0 && v.is_finite(), "a positive filter factor")?;
     let form = p.choice("form", &["fst", "paper", "fhan"])?;
     let c_default = if form == "paper" { h } else { h0 };

@@ -148,7 +148,7 @@ fn noise(p: &mut Params, law: Law) -> Result<Built, Diagnostic> {
 
 fn build_band_limited(p: &mut Params) -> Result<Built, Diagnostic> {
     let power = p.number_where("power", Some(0.1), |v| v >= 0.0 && v.is_finite(), "a power >= 0")?;
-    let t = p.discrete_sample_time()?.period().unwrap_or(f64::NAN);
+    let (_, t, _) = p.discrete_clock()?;
     noise(p, Law::Normal { mean: 0.0, std: (power / t).sqrt() })
 }
 

@@ -382,11 +382,16 @@ impl<'a> Params<'a> {
     /// Like [`Params::sample_time`] for blocks that only exist in discrete
     /// form: the period is required.
     pub fn discrete_sample_time(&mut self) -> Result<SampleTime, Diagnostic> {
+        Ok(self.discrete_clock()?.0)
+    }
+
+    /// [`Params::discrete_sample_time`] with its period and offset.
+    pub fn discrete_clock(&mut self) -> Result<(SampleTime, f64, f64), Diagnostic> {
         if !self.has("sample_time") {
             return Err(self.missing("sample_time"));
         }
         match self.sample_time(SampleTime::Inherited)? {
-            st @ SampleTime::Discrete { .. } => Ok(st),
+            st @ SampleTime::Discrete { period, offset } => Ok((st, period, offset)),
             other => Err(self
                 .error("sample_time", format!("this block is discrete: needs a period T > 0, got {other}"))
                 .with_hint("write `sample_time: T` or `sample_time: [T, offset]`")),

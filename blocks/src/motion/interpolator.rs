@@ -73,10 +73,7 @@ impl Block for PathInterpolator {
 }
 
 fn build_path_interpolator(p: &mut Params) -> Result<Built, Diagnostic> {
-    let st = p.discrete_sample_time()?;
-    let ctlgraph_core::SampleTime::Discrete { period: tc, .. } = st else {
-        return Err(p.error("sample_time", "needs a period Tc > 0"));
-    };
+    let (st, tc, _) = p.discrete_clock()?;
     let initial = p.number_where("initial", Some(0.0), |u| (0.0..=1.0).contains(&u), "in [0, 1]")?;
     let iface = Interface::new(st)
         .input("f", Width::Fixed(1), false)

@@ -7,7 +7,7 @@ use super::interpolator::taylor_step;
 use super::{SCurve, read_points, shown};
 use crate::param;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
 pub const MIRROR_FEED_PLAN: BlockType = BlockType {
     name: "mirror_feed_plan",
@@ -99,7 +99,7 @@ fn length(path: &BSpline) -> f64 {
     let mut out = vec![0.0; 3 * dim];
     let mut speed = |u: f64| {
         path.eval(u, &mut out);
-        out[dim..2 * dim].iter().map(|v| v * v).sum::<f64>().sqrt()
+        norm(&out[dim..2 * dim])
     };
     let h = 1.0 / n as f64;
     let mut sum = speed(0.0) + speed(1.0);
@@ -298,10 +298,7 @@ fn build_mirror_feed_plan(p: &mut Params) -> Result<Built, Diagnostic> {
     let fit = |pts: &[f64]| BSpline::fit(pts, dim, &params, n_control);
     let path = fit(&points).map_err(|m| p.error("control_points", m))?;
     let support = fit(&support_points).map_err(|m| p.error("support_points", m))?;
-    let st = p.discrete_sample_time()?;
-    let SampleTime::Discrete { period: tc, offset } = st else {
-        return Err(p.error("sample_time", "needs a period Tc > 0"));
-    };
+    let (st, tc, offset) = p.discrete_clock()?;
     let positive_or_inf = |v: f64| v > 0.0;
     let limits = SyncLimits {
         feed: p.positive("feed")?,
