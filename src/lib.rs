@@ -61,11 +61,17 @@ pub fn compile_flat(flat: &FlatGraph, registry: &Registry) -> Result<Model, Diag
 /// Like [`compile_file`] with `simulation.seed` replaced (random blocks
 /// derive their streams from it when they are built).
 pub fn compile_file_seeded(path: &Path, sets: &[(String, String)], seed: Option<u64>) -> Result<Model, Diagnostic> {
+    compile_flat(&load_seeded(path, sets, seed)?, &registry())
+}
+
+/// Loads a graph file with `simulation.seed` replaced, for compiling with
+/// [`compile_flat`] when the loaded graph is needed too (the HTML report).
+pub fn load_seeded(path: &Path, sets: &[(String, String)], seed: Option<u64>) -> Result<FlatGraph, Diagnostic> {
     let mut flat = ctlgraph_core::load(path, sets)?;
     if let Some(s) = seed {
         flat.sim.seed = s;
     }
-    compile_flat(&flat, &registry())
+    Ok(flat)
 }
 
 /// Like [`compile_file`] for graph text in memory; `name` stands for the

@@ -45,10 +45,7 @@ pub(crate) fn report(csv: &Path, json: &Path, html: &Path) -> Result<(), Failure
         .flatten()
         .filter_map(|o| Some((o["name"].as_str()?.to_string(), o["value"].as_str()?.to_string())))
         .collect();
-    let mut flat = ctlgraph_core::load(&graph, &sets)?;
-    if let Some(seed) = run["seed"].as_u64() {
-        flat.sim.seed = seed;
-    }
+    let flat = ctlgraph::load_seeded(&graph, &sets, run["seed"].as_u64())?;
     let model = ctlgraph::compile_flat(&flat, &ctlgraph::registry())?;
     let trace = read_trace(csv)?;
     let missing: Vec<String> = model.headers().into_iter().filter(|h| !trace.headers.contains(h)).collect();

@@ -98,7 +98,8 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
     // `--out -`: the CSV goes to stdout, the summary to stderr.
     let to_stdout = opts.out.is_some_and(|p| p == Path::new("-"));
     let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
-    let model = ctlgraph::compile_file_seeded(graph, &sets, opts.seed)?;
+    let flat = ctlgraph::load_seeded(graph, &sets, opts.seed)?;
+    let model = ctlgraph::compile_flat(&flat, &ctlgraph::registry())?;
     let seed = model.sim.seed;
     let mut sim = Simulator::new(model, opts.stop_time);
     if let Some(w) = long_run_warning(&sim) {
@@ -200,7 +201,6 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
             write_atomic(path, text.as_bytes()).map_err(io_error(path))?;
         }
         if let (Some(path), Some(tr)) = (opts.html, &trace) {
-            let flat = ctlgraph_core::load(graph, &sets)?;
             let page =
                 ctlgraph::html::render(&Report { run: &json, trace: tr, flat: &flat, model: sim.model(), notes: &[] });
             write_atomic(path, page.as_bytes()).map_err(io_error(path))?;

@@ -10,7 +10,7 @@ use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyKeyError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard};
 
 create_exception!(
@@ -64,10 +64,6 @@ fn overrides(set: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, String)>>
             Ok((name, value))
         })
         .collect()
-}
-
-fn compile(path: &Path, sets: &[(String, String)], seed: Option<u64>) -> Result<Model, Diagnostic> {
-    ctlgraph::compile_file_seeded(path, sets, seed)
 }
 
 /// One check of a graph, evaluated on a run.
@@ -204,7 +200,7 @@ fn run(
     seed: Option<u64>,
 ) -> PyResult<RunResult> {
     let sets = overrides(set)?;
-    let model = py.detach(|| compile(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
+    let model = py.detach(|| ctlgraph::compile_file_seeded(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
     let (trace, checks, counts, wall) = py.detach(|| simulate(model, stop)).map_err(SimulationError::new_err)?;
     let Trace { headers, columns, .. } = trace;
     let columns = columns.into_iter().map(|c| PyArray1::from_vec(py, c).unbind()).collect();
@@ -223,7 +219,7 @@ fn run(
 #[pyo3(signature = (path, set = None))]
 fn check(py: Python<'_>, path: PathBuf, set: Option<&Bound<'_, PyDict>>) -> PyResult<Py<PyList>> {
     let sets = overrides(set)?;
-    let model = py.detach(|| compile(&path, &sets, None)).map_err(|d| graph_error(py, &d))?;
+    let model = py.detach(|| ctlgraph::compile_file(&path, &sets)).map_err(|d| graph_error(py, &d))?;
     blocks_of(py, &model)
 }
 
@@ -381,7 +377,7 @@ impl LoadedModel {
 #[pyo3(signature = (path, set = None, seed = None))]
 fn load(py: Python<'_>, path: PathBuf, set: Option<&Bound<'_, PyDict>>, seed: Option<u64>) -> PyResult<LoadedModel> {
     let sets = overrides(set)?;
-    let model = py.detach(|| compile(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
+    let model = py.detach(|| ctlgraph::compile_file_seeded(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
     Ok(LoadedModel { sim: Mutex::new(Simulator::new(model, None)) })
 }
 

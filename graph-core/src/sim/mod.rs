@@ -13,14 +13,16 @@
 mod error;
 mod events;
 mod host;
+mod minor;
 pub use error::SimError;
 pub use host::Snapshot;
 
 use crate::block::{Io, Port};
 use crate::compile::{Between, Model, Rate, Slot};
-use ctlgraph_solver::{Integrator, Method, OdeSystem, SolverError, Stats, Zoh};
+use ctlgraph_solver::{Integrator, Method, SolverError, Stats, Zoh};
 pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
+use minor::Minor;
 
 /// The times k·h of a grid with step h. When h is the reciprocal of a
 /// whole number n (0.01, 1e-4, 0.5), k/n is used: division is correctly
@@ -569,52 +571,4 @@ pub(crate) fn io_for<'a>(
         &in_ports[meta.inputs.clone()],
         &out_ports[meta.outputs.clone()],
     )
-}
-
-/// The ODE the solver sees: set states, recompute continuous outputs (modes
-/// frozen where zero crossings are watched), ask stateful blocks for
-/// derivatives. Discrete outputs hold.
-pub(crate) struct Minor<'a> {
-    model: &'a mut Model,
-    signals: &'a mut [f64],
-    continuous: &'a [usize],
-    stateful: &'a [usize],
-    t_end: f64,
-}
-
-impl Minor<'_> {
-    /// Continuous outputs at (t, x), modes frozen.
-    fn outputs(&mut self, t: f64, x: &[f64]) {
-        let m = &mut *self.model;
-        let left = t >= self.t_end;
-        for &i in self.continuous {
-            let meta = &m.slots[i];
-            let mut io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
-            m.blocks[i].output(&mut io);
-        }
-    }
-}
-
-impl Minor<'_> {
-    /// Block `i`'s zero-crossing functions at (t, x), outputs computed.
-    fn zero_crossings(&mut self, i: usize, t: f64, x: &[f64], g: &mut [f64]) {
-        let m = &mut *self.model;
-        let meta = &m.slots[i];
-        let io =
-            io_for(meta, t, t >= self.t_end, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
-        m.blocks[i].zero_crossings(&io, g);
-    }
-}
-
-impl OdeSystem for Minor<'_> {
-    fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
-        self.outputs(t, x);
-        let m = &mut *self.model;
-        let left = t >= self.t_end;
-        for &i in self.stateful {
-            let meta = &m.slots[i];
-            let io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
-            m.blocks[i].derivatives(&io, &mut dx[meta.states.clone()]);
-        }
-    }
 }
