@@ -3,6 +3,7 @@
 //! inputs (output membership values on the sampled universe) is computed
 //! once; `eval` writes into preallocated buffers and allocates nothing.
 
+use super::grid::RuleGrid;
 use std::ops::Range;
 
 /// A membership function (parameter order as MATLAB's).
@@ -186,8 +187,12 @@ pub struct Fis {
     /// by that membership's index; and the rules always evaluated.
     sparse: Vec<Vec<usize>>,
     dense: Vec<usize>,
+    /// When the inputs are triangular partitions and the rules a table:
+    /// the rules that can fire found by arithmetic (see `grid`).
+    grid: Option<RuleGrid>,
     // Work buffers.
     membership: Vec<f64>,
+    clipped: Vec<f64>,
     /// (rule, strength) of the rules with nonzero strength this call: the
     /// first `n_fired` entries.
     fired: Vec<(usize, f64)>,
@@ -236,6 +241,8 @@ impl Fis {
         }
         let most_terms = outputs.iter().map(|v| v.terms.len()).max().unwrap_or(0);
         Fis {
+            grid: RuleGrid::new(&inputs, &rules, methods.and),
+            clipped: vec![0.0; inputs.len()],
             membership: vec![0.0; n_memberships],
             fired: vec![(0, 0.0); rules.len()],
             n_fired: 0,
@@ -256,12 +263,40 @@ impl Fis {
         }
     }
 
+    /// The same system with the rule table's shortcut off (the reference
+    /// it is tested against).
+    #[cfg(test)]
+    pub(super) fn without_rule_grid(mut self) -> Self {
+        self.grid = None;
+        self
+    }
+
+    /// Whether the rules that fire are found from a table (see `grid`).
+    pub fn uses_rule_grid(&self) -> bool {
+        self.grid.is_some()
+    }
+
     /// Evaluates the system: inputs are clipped to their universes.
     pub fn eval(&mut self, x: &[f64], y: &mut [f64]) {
+        for (c, (v, &xi)) in self.clipped.iter_mut().zip(self.inputs.iter().zip(x)) {
+            *c = xi.clamp(v.lo, v.hi);
+        }
+        self.n_fired = match &mut self.grid {
+            Some(grid) => grid.fire(&self.clipped, &mut self.fired),
+            None => self.fire_by_memberships(),
+        };
+        for (o, yo) in y.iter_mut().enumerate().take(self.outputs.len()) {
+            *yo = if self.sugeno { self.sugeno_output(o) } else { self.mamdani_output(o) };
+        }
+    }
+
+    /// Computes every membership, then the strengths of the rules that can
+    /// fire given which are nonzero; returns how many fired (first in
+    /// `fired`).
+    fn fire_by_memberships(&mut self) -> usize {
         for (i, v) in self.inputs.iter().enumerate() {
-            let xi = x[i].clamp(v.lo, v.hi);
             for (k, (_, mf)) in v.terms.iter().enumerate() {
-                self.membership[self.offsets[i] + k] = mf.eval(xi);
+                self.membership[self.offsets[i] + k] = mf.eval(self.clipped[i]);
             }
         }
         // Which rules fire follows no pattern a branch predictor could
@@ -274,10 +309,7 @@ impl Fis {
             self.fired[n] = (r, s);
             n += usize::from(s > 0.0);
         }
-        self.n_fired = n;
-        for (o, yo) in y.iter_mut().enumerate().take(self.outputs.len()) {
-            *yo = if self.sugeno { self.sugeno_output(o) } else { self.mamdani_output(o) };
-        }
+        n
     }
 
     /// The firing strength of `rule` at the current memberships.

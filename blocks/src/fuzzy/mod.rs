@@ -3,6 +3,7 @@
 //! sentences), compiled once and evaluated without allocation.
 
 pub mod fis;
+mod grid;
 
 use crate::{SAMPLE_TIME_INHERITED, param};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};

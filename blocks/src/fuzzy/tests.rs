@@ -274,3 +274,141 @@ fn uniform_terms_reach_their_neighbours_peaks() {
     let terms = uniform_triangles(-0.3, 0.9, &NAMES);
     assert!(matches!(terms[6].1, Mf::Tri(_, 0.9, 0.9)) && matches!(terms[5].1, Mf::Tri(_, _, 0.9)));
 }
+
+/// The rule table's shortcut (inputs that are triangular partitions, rules
+/// one term per input) fires the same rules with the same strengths as the
+/// general path: outputs equal to the bit (to rounding where the order of a
+/// sum or a product of three memberships differs), over uniform and uneven
+/// partitions, two and three inputs, empty and shared cells, two outputs,
+/// every method, Sugeno, and inputs on peaks and outside the universes.
+#[test]
+fn rule_table_shortcut_fires_as_the_general_path() {
+    use rand_chacha::ChaCha8Rng;
+    use rand_chacha::rand_core::{Rng, SeedableRng};
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut uniform = move || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+    assert!(paper_k1(Methods::default()).uses_rule_grid());
+    let mut checked = 0;
+    for system in 0..40 {
+        let n_inputs = 2 + system % 2;
+        let inputs: Vec<Variable> = (0..n_inputs)
+            .map(|i| {
+                let n = [3, 5, 7][(system + i) % 3];
+                let names: Vec<String> = (0..n).map(|k| format!("T{k}")).collect();
+                let names: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+                let mut terms = uniform_triangles(-1.0, 1.0, &names);
+                if system % 4 >= 2 {
+                    // Uneven peaks, same chaining.
+                    let mut peaks: Vec<f64> = (0..n)
+                        .map(|k| {
+                            if k == 0 {
+                                -1.0
+                            } else if k == n - 1 {
+                                1.0
+                            } else {
+                                2.0 * uniform() - 1.0
+                            }
+                        })
+                        .collect();
+                    peaks.sort_by(f64::total_cmp);
+                    for k in 0..n {
+                        terms[k].1 = Mf::Tri(peaks[k.saturating_sub(1)], peaks[k], peaks[(k + 1).min(n - 1)]);
+                    }
+                }
+                Variable { name: format!("x{i}"), lo: -1.0, hi: 1.0, terms }
+            })
+            .collect();
+        let out = |name: &str| Variable {
+            name: name.into(),
+            lo: 0.0,
+            hi: 1.0,
+            terms: uniform_triangles(0.0, 1.0, &["L", "M", "H"]),
+        };
+        let mut rules = Vec::new();
+        let cells: usize = inputs.iter().map(|v| v.terms.len()).product();
+        for cell in 0..cells {
+            for _ in 0..[0, 1, 1, 2][(uniform() * 4.0) as usize % 4] {
+                let mut c = cell;
+                let antecedents = inputs
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| {
+                        let k = c % v.terms.len();
+                        c /= v.terms.len();
+                        (i, k, false)
+                    })
+                    .rev()
+                    .collect();
+                let consequents = vec![((uniform() * 2.0) as usize % 2, (uniform() * 3.0) as usize % 3)];
+                rules.push(Rule { antecedents, connective: Connective::And, consequents });
+            }
+        }
+        for (and, imp, agg, sugeno) in [
+            (AndMethod::Min, Implication::Min, Aggregation::Max, false),
+            (AndMethod::Product, Implication::Product, Aggregation::Max, false),
+            (AndMethod::Min, Implication::Min, Aggregation::Sum, false),
+            (AndMethod::Product, Implication::Product, Aggregation::Sum, false),
+            (AndMethod::Min, Implication::Min, Aggregation::Max, true),
+        ] {
+            let methods = Methods { and, implication: imp, aggregation: agg, ..Default::default() };
+            let outputs = if sugeno {
+                let consts = |n: &str| Variable {
+                    name: n.into(),
+                    lo: 0.0,
+                    hi: 1.0,
+                    terms: vec![
+                        ("L".into(), Mf::Const(0.1)),
+                        ("M".into(), Mf::Const(0.5)),
+                        ("H".into(), Mf::Const(0.8)),
+                    ],
+                };
+                vec![consts("a"), consts("b")]
+            } else {
+                vec![out("a"), out("b")]
+            };
+            let build = || Fis::new(inputs.clone(), outputs.clone(), rules.clone(), methods, sugeno);
+            let (mut fast, mut general) = (build(), build().without_rule_grid());
+            assert!(fast.uses_rule_grid(), "system {system}");
+            let exact = !sugeno && agg == Aggregation::Max && (and == AndMethod::Min || n_inputs == 2);
+            for s in 0..60 {
+                let mut x: Vec<f64> = (0..n_inputs).map(|_| 2.6 * uniform() - 1.3).collect();
+                if s % 5 == 0 {
+                    // On a peak.
+                    let Mf::Tri(_, b, _) = inputs[0].terms[s % inputs[0].terms.len()].1 else { unreachable!() };
+                    x[0] = b;
+                }
+                let (mut y1, mut y2) = ([f64::NAN; 2], [f64::NAN; 2]);
+                fast.eval(&x, &mut y1);
+                general.eval(&x, &mut y2);
+                for o in 0..2 {
+                    let close = if exact { y1[o] == y2[o] } else { (y1[o] - y2[o]).abs() <= 1e-15 };
+                    assert!(close, "system {system} {methods:?} sugeno {sugeno} at {x:?}: {y1:?} vs {y2:?}");
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 40 * 5 * 60);
+    // A negated antecedent, an OR, or a rule missing an input: the general path.
+    let inputs = || {
+        vec![Variable { name: "a".into(), lo: -1.0, hi: 1.0, terms: uniform_triangles(-1.0, 1.0, &["N", "Z", "P"]) }; 2]
+    };
+    let output =
+        || vec![Variable { name: "y".into(), lo: 0.0, hi: 1.0, terms: uniform_triangles(0.0, 1.0, &["L", "H"]) }];
+    for antecedents in [vec![(0, 0, true), (1, 0, false)], vec![(0, 0, false)], vec![(0, 0, false), (0, 1, false)]] {
+        let rule = Rule { antecedents, connective: Connective::And, consequents: vec![(0, 0)] };
+        assert!(!Fis::new(inputs(), output(), vec![rule], Methods::default(), false).uses_rule_grid());
+    }
+    let or =
+        Rule { antecedents: vec![(0, 0, false), (1, 0, false)], connective: Connective::Or, consequents: vec![(0, 0)] };
+    assert!(!Fis::new(inputs(), output(), vec![or], Methods::default(), false).uses_rule_grid());
+    // Terms that are not a partition (a gap between feet and peaks).
+    let mut gap = inputs();
+    gap[1].terms[1].1 = Mf::Tri(-0.9, 0.0, 1.0);
+    let rule = Rule {
+        antecedents: vec![(0, 0, false), (1, 0, false)],
+        connective: Connective::And,
+        consequents: vec![(0, 0)],
+    };
+    assert!(!Fis::new(gap, output(), vec![rule], Methods::default(), false).uses_rule_grid());
+}

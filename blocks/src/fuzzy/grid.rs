@@ -1,0 +1,139 @@
+//! The common shape of a fuzzy controller, evaluated without visiting every
+//! membership: each input's terms a triangular partition (term k rises from
+//! peak k−1 to peak k and falls to peak k+1, the end ones half triangles),
+//! and the rules a table: each an AND of one plain term per input.
+//!
+//! An input inside a partition lies between two neighbouring peaks, so only
+//! those two terms can be nonzero, and which they are is arithmetic (no
+//! comparison per term); with n inputs only the 2ⁿ cells of the table at
+//! those terms can fire. The memberships are computed with the same
+//! expressions as [`Mf::eval`], so the fired strengths are the general
+//! path's to the bit.
+
+use super::fis::{AndMethod, Connective, Mf, Rule, Variable};
+
+/// One input's partition: its peaks, strictly increasing.
+#[derive(Clone, Debug)]
+struct Partition {
+    peaks: Vec<f64>,
+    /// The mean spacing, for the first guess of where an input falls.
+    per_step: f64,
+}
+
+impl Partition {
+    /// `None` unless the terms are a triangular partition covering [lo, hi]:
+    /// Tri(p_{k−1}, p_k, p_{k+1}) with p_{−1} = p_0 and p_n = p_{n−1}.
+    fn of(v: &Variable) -> Option<Self> {
+        let corners = v.terms.iter().map(|(_, mf)| match *mf {
+            Mf::Tri(a, b, c) => Some((a, b, c)),
+            _ => None,
+        });
+        let corners = corners.collect::<Option<Vec<_>>>()?;
+        let peaks: Vec<f64> = corners.iter().map(|c| c.1).collect();
+        let n = peaks.len();
+        let peak = |k: usize| peaks[k.min(n - 1)];
+        let chained =
+            corners.iter().enumerate().all(|(k, &(a, _, c))| a == peak(k.saturating_sub(1)) && c == peak(k + 1));
+        let increasing = peaks.windows(2).all(|w| w[0] < w[1]);
+        let covers = n >= 2 && peaks[0] <= v.lo && v.hi <= peaks[n - 1];
+        (chained && increasing && covers)
+            .then(|| Partition { per_step: (n - 1) as f64 / (peaks[n - 1] - peaks[0]), peaks })
+    }
+
+    /// The k with peak k ≤ x < peak k+1 (k ≤ n − 2), and the memberships of
+    /// terms k and k+1 at x, as `Mf::eval` computes them.
+    fn locate(&self, x: f64) -> (usize, f64, f64) {
+        let p = &self.peaks;
+        let last = p.len() - 2;
+        let mut k = (((x - p[0]) * self.per_step).max(0.0) as usize).min(last);
+        while k > 0 && x < p[k] {
+            k -= 1;
+        }
+        while k < last && x >= p[k + 1] {
+            k += 1;
+        }
+        if x == p[k] {
+            (k, 1.0, 0.0)
+        } else if x == p[k + 1] {
+            (k, 0.0, 1.0)
+        } else {
+            (k, (p[k + 1] - x) / (p[k + 1] - p[k]), (x - p[k]) / (p[k + 1] - p[k]))
+        }
+    }
+}
+
+/// The rule table over the inputs' partitions.
+#[derive(Clone, Debug)]
+pub struct RuleGrid {
+    partitions: Vec<Partition>,
+    /// Cell of term indices (k_0, k_1, …) at Σ k_i·stride_i; its rules are
+    /// rules[cells[c]..cells[c + 1]].
+    strides: Vec<usize>,
+    cells: Vec<usize>,
+    rules: Vec<usize>,
+    product: bool,
+    /// Per input, the located term and its two memberships (work buffer).
+    located: Vec<(usize, f64, f64)>,
+}
+
+impl RuleGrid {
+    /// `None` unless every input is a partition and every rule an AND of one
+    /// plain term of each input (and the table has at most 2¹⁶ cells).
+    pub fn new(inputs: &[Variable], rules: &[Rule], and: AndMethod) -> Option<Self> {
+        let partitions = inputs.iter().map(Partition::of).collect::<Option<Vec<_>>>()?;
+        let mut strides = Vec::with_capacity(inputs.len());
+        let mut size = 1usize;
+        for v in inputs {
+            strides.push(size);
+            size = size.checked_mul(v.terms.len()).filter(|&s| s <= 1 << 16)?;
+        }
+        let mut by_cell: Vec<Vec<usize>> = vec![Vec::new(); size];
+        for (r, rule) in rules.iter().enumerate() {
+            let mut seen = vec![false; inputs.len()];
+            let mut cell = 0;
+            for &(i, k, negated) in &rule.antecedents {
+                if negated || seen[i] || rule.connective != Connective::And {
+                    return None;
+                }
+                seen[i] = true;
+                cell += k * strides[i];
+            }
+            if seen.contains(&false) {
+                return None;
+            }
+            by_cell[cell].push(r);
+        }
+        let mut cells = vec![0];
+        for c in &by_cell {
+            cells.push(cells[cells.len() - 1] + c.len());
+        }
+        let located = vec![(0, 0.0, 0.0); inputs.len()];
+        let rules = by_cell.concat();
+        Some(RuleGrid { partitions, strides, cells, rules, product: and == AndMethod::Product, located })
+    }
+
+    /// Writes (rule, strength) of the rules in the 2ⁿ cells around `x`
+    /// (clipped to the universes already) to `fired` and returns how many
+    /// have nonzero strength — those come first.
+    pub fn fire(&mut self, x: &[f64], fired: &mut [(usize, f64)]) -> usize {
+        for ((l, p), &xi) in self.located.iter_mut().zip(&self.partitions).zip(x) {
+            *l = p.locate(xi);
+        }
+        let mut n = 0;
+        for corner in 0..1usize << self.located.len() {
+            let (mut cell, mut strength) = (0, if self.product { 1.0 } else { f64::INFINITY });
+            for (i, &(k, at_k, at_next)) in self.located.iter().enumerate() {
+                let up = corner >> i & 1;
+                let mu = if up == 1 { at_next } else { at_k };
+                cell += (k + up) * self.strides[i];
+                strength = if self.product { strength * mu } else { strength.min(mu) };
+            }
+            for &r in &self.rules[self.cells[cell]..self.cells[cell + 1]] {
+                // Written always; the count moves only for nonzero strength.
+                fired[n] = (r, strength);
+                n += usize::from(strength > 0.0);
+            }
+        }
+        n
+    }
+}
