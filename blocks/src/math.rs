@@ -247,6 +247,13 @@ impl Block for Sum {
             io.set(0, self.signs[0] * s);
             return;
         }
+        if let [a, b] = self.signs[..]
+            && io.output_width(0) == 1
+        {
+            // The common two-input case, the same sum as below.
+            io.set(0, a * io.u(0) + b * io.u(1));
+            return;
+        }
         if io.output_width(0) == 1 {
             let v: f64 = self.signs.iter().enumerate().map(|(i, s)| s * io.u(i)).sum();
             io.set(0, v);

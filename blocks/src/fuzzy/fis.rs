@@ -174,12 +174,10 @@ pub struct Fis {
     pub methods: Methods,
     pub sugeno: bool,
     /// Per output: the sampled universe, each term's membership on it and
-    /// the index range where that is nonzero, and the weights that make the
-    /// centroid's moment and area dot products.
+    /// the index range where that is nonzero.
     grids: Vec<Vec<f64>>,
     term_grids: Vec<Vec<Vec<f64>>>,
     supports: Vec<Vec<Range<usize>>>,
-    centroid_weights: Vec<(Vec<f64>, Vec<f64>)>,
     /// Where each input's term memberships start in `membership`.
     offsets: Vec<usize>,
     /// Rules that fire only when one given membership is nonzero (an AND
@@ -248,7 +246,6 @@ impl Fis {
             n_fired: 0,
             term_strength: vec![0.0; most_terms],
             aggregate: vec![0.0; m],
-            centroid_weights: grids.iter().map(|g| centroid_weights(g)).collect(),
             offsets,
             sparse,
             dense,
@@ -391,10 +388,7 @@ impl Fis {
         }
         let touched = from..to;
         let y = if methods.defuzzification == Defuzzification::Centroid {
-            let (moment, area) = &self.centroid_weights[o];
-            let r = touched.clone();
-            let (m, total) = moment_and_area(&moment[r.clone()], &area[r.clone()], &aggregate[r]);
-            if total > 0.0 { m / total } else { midpoint }
+            centroid_on_grid(aggregate, touched.clone(), v.lo, v.hi).unwrap_or(midpoint)
         } else {
             defuzzify(&self.grids[o], aggregate, methods.defuzzification).unwrap_or(midpoint)
         };
@@ -431,42 +425,44 @@ fn imply_and_aggregate(aggregate: &mut [f64], mu: &[f64], w: f64, imp: Implicati
     }
 }
 
-/// The centroid of a piecewise-linear μ sampled at `x` is moment/area with
-/// both linear in the samples: per segment, area = dx·(μ1 + μ2)/2 and
-/// moment = dx/2·[(μ1 + μ2)·x1 + dx·(μ1 + 2μ2)/3] (scikit-fuzzy's
-/// trapezoids). Returns the weights (moment, area) per sample.
-fn centroid_weights(x: &[f64]) -> (Vec<f64>, Vec<f64>) {
-    let (mut moment, mut area) = (vec![0.0; x.len()], vec![0.0; x.len()]);
-    for j in 0..x.len().saturating_sub(1) {
-        let dx = x[j + 1] - x[j];
-        area[j] += 0.5 * dx;
-        area[j + 1] += 0.5 * dx;
-        moment[j] += 0.5 * dx * (x[j] + dx / 3.0);
-        moment[j + 1] += 0.5 * dx * (x[j] + 2.0 * dx / 3.0);
-    }
-    (moment, area)
-}
-
-/// (Σ moment·μ, Σ area·μ) in one pass, with four running sums each so
-/// the loop vectorises.
-fn moment_and_area(moment: &[f64], area: &[f64], mu: &[f64]) -> (f64, f64) {
-    let (mut m4, mut a4) = ([0.0f64; 4], [0.0f64; 4]);
-    let n = mu.len().min(moment.len()).min(area.len());
-    let whole = n - n % 4;
-    for ((mc, ac), uc) in
-        moment[..whole].chunks_exact(4).zip(area[..whole].chunks_exact(4)).zip(mu[..whole].chunks_exact(4))
-    {
+/// The centroid of the piecewise-linear μ sampled on the uniform grid
+/// x_j = lo + j·dx, j = 0 … L (scikit-fuzzy's trapezoids; `defuzzify`),
+/// from the samples in `range` (μ is zero outside). Per segment, area =
+/// dx·(μ_j + μ_{j+1})/2 and moment = dx/2·[(μ_j + μ_{j+1})·x_j +
+/// dx·(μ_j + 2μ_{j+1})/3]; summed over the grid, each inner sample weighs
+/// dx in the area and dx·x_j in the moment, the end ones half that with a
+/// correction of ±dx²/6. With S0 = Σ μ_j, S1 = Σ j·μ_j:
+///
+///   centroid = lo + dx·(S1 + μ_0/6 − μ_L·(L/2 + 1/6)) / (S0 − (μ_0 + μ_L)/2)
+///
+/// Two running sums without weight arrays, four lanes each so the loop
+/// vectorises. `None` when the area is zero.
+pub(super) fn centroid_on_grid(mu: &[f64], range: Range<usize>, lo: f64, hi: f64) -> Option<f64> {
+    let last = mu.len() - 1;
+    let first_value = if range.start == 0 { mu[0] } else { 0.0 };
+    let last_value = if range.end == mu.len() { mu[last] } else { 0.0 };
+    let from = range.start as f64;
+    let samples = &mu[range];
+    let (mut s0, mut s1) = ([0.0f64; 4], [0.0f64; 4]);
+    let chunks = samples.chunks_exact(4);
+    let tail = chunks.remainder();
+    let mut index = [0.0, 1.0, 2.0, 3.0];
+    for c in chunks {
         for k in 0..4 {
-            m4[k] += mc[k] * uc[k];
-            a4[k] += ac[k] * uc[k];
+            s0[k] += c[k];
+            s1[k] += index[k] * c[k];
+            index[k] += 4.0;
         }
     }
-    let (mut m, mut a) = ((m4[0] + m4[1]) + (m4[2] + m4[3]), (a4[0] + a4[1]) + (a4[2] + a4[3]));
-    for j in whole..n {
-        m += moment[j] * mu[j];
-        a += area[j] * mu[j];
+    let (mut sum, mut moment) = ((s0[0] + s0[1]) + (s0[2] + s0[3]), (s1[0] + s1[1]) + (s1[2] + s1[3]));
+    for (k, &v) in tail.iter().enumerate() {
+        sum += v;
+        moment += index[k] * v;
     }
-    (m, a)
+    // Σ j·μ_j with j = from + local index.
+    let moment = from * sum + moment + first_value / 6.0 - last_value * (last as f64 / 2.0 + 1.0 / 6.0);
+    let area = sum - 0.5 * (first_value + last_value);
+    (area > 0.0).then(|| lo + (hi - lo) / last as f64 * moment / area)
 }
 
 /// Defuzzifies a sampled membership function; `None` when it is zero

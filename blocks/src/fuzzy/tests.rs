@@ -412,3 +412,37 @@ fn rule_table_shortcut_fires_as_the_general_path() {
     };
     assert!(!Fis::new(gap, output(), vec![rule], Methods::default(), false).uses_rule_grid());
 }
+
+/// The centroid from two running sums over a range of the uniform grid
+/// equals scikit-fuzzy's trapezoid centroid (`defuzzify`) over the whole
+/// grid, for samples touching either end or neither, at several
+/// resolutions.
+#[test]
+fn centroid_on_the_grid_equals_the_trapezoid_centroid() {
+    use super::fis::centroid_on_grid;
+    use rand_chacha::ChaCha8Rng;
+    use rand_chacha::rand_core::{Rng, SeedableRng};
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let mut uniform = move || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+    for case in 0..300 {
+        let m = [2, 3, 7, 101, 201][case % 5];
+        let (lo, hi) = (-3.0 + uniform(), 1.0 + 4.0 * uniform());
+        let x: Vec<f64> = (0..m).map(|j| lo + (hi - lo) * j as f64 / (m - 1) as f64).collect();
+        let (a, b) = ((uniform() * m as f64) as usize % m, (uniform() * m as f64) as usize % m);
+        let range = match case % 3 {
+            0 => 0..m,
+            1 => 0..a.max(1),
+            _ => a.min(b)..a.max(b) + 1,
+        };
+        let mut mu = vec![0.0; m];
+        for j in range.clone() {
+            mu[j] = uniform();
+        }
+        let want = defuzzify(&x, &mu, Defuzzification::Centroid);
+        let got = centroid_on_grid(&mu, range.clone(), lo, hi);
+        match (want, got) {
+            (Some(w), Some(g)) => assert!((w - g).abs() < 1e-12 * (hi - lo), "case {case}, {range:?}: {g} vs {w}"),
+            (w, g) => assert_eq!(w.is_some(), g.is_some(), "case {case}"),
+        }
+    }
+}

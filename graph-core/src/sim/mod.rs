@@ -108,6 +108,10 @@ pub struct Simulator {
     held: Vec<Held>,
     /// Blocks with an `update` to run (execution order).
     updating: Vec<usize>,
+    /// The blocks in execution order; those a major step without an event
+    /// runs (or runs at its clock's hits): neither constant nor event-only.
+    every: Vec<usize>,
+    regular: Vec<usize>,
     /// Whether this major step is at a block event (see `Between::event_only`).
     at_event: bool,
     /// A host set an input since the last outputs (see [`Simulator::set_input`]).
@@ -177,6 +181,10 @@ impl Simulator {
             held,
             between: model.between.clone(),
             updating: (0..model.blocks.len()).filter(|&i| model.blocks[i].updates()).collect(),
+            every: (0..model.blocks.len()).collect(),
+            regular: (0..model.blocks.len())
+                .filter(|&i| model.slots[i].rate != Rate::Constant && !model.between.event_only[i])
+                .collect(),
             at_event: true,
             inputs_changed: false,
             pause: f64::INFINITY,
@@ -286,15 +294,13 @@ impl Simulator {
     /// first pass only.
     fn sweep(&mut self) {
         let m = &mut self.model;
-        let skip_event_only = !self.first && !self.at_event && !self.inputs_changed;
-        for (i, block) in m.blocks.iter_mut().enumerate() {
+        let all = self.first || self.at_event || self.inputs_changed;
+        let order = if all { &self.every } else { &self.regular };
+        for &i in order {
             let slot = &m.slots[i];
-            if skip_event_only && self.between.event_only[i] {
-                continue;
-            }
             if due(slot.rate, &self.clocks, self.first) {
                 let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
-                block.output(&mut io);
+                m.blocks[i].output(&mut io);
             }
         }
     }
