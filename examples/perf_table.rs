@@ -1,0 +1,120 @@
+//! Prints the README's performance tables from criterion's last results
+//! (the medians in target/criterion/*/new/estimates.json), so the numbers
+//! quoted are the ones a run measured, side by side:
+//!
+//!     cargo bench --bench fladrc --bench overhead --bench scaling --bench sweep
+//!     cargo run --release --example perf_table
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// Samples of the FLADRC scenario (2 s at h = 1e-4, both ends) and steps of
+/// the PID loop, as the benches run them.
+const SCENARIO_SAMPLES: f64 = 20_001.0;
+const PID_STEPS: f64 = 10_000.0;
+/// Steps per timed run in the scaling bench.
+const SCALING_STEPS: f64 = 100.0;
+
+fn main() -> ExitCode {
+    let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| PathBuf::from("target"), PathBuf::from);
+    match tables(&target.join("criterion")) {
+        Ok(text) => {
+            print!("{text}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+/// The median of benchmark `id` in seconds.
+fn median(root: &Path, id: &str) -> Result<f64, String> {
+    let file = root.join(id).join("new/estimates.json");
+    let text = std::fs::read_to_string(&file)
+        .map_err(|e| format!("{}: {e} (run the benches first: see this example's doc)", file.display()))?;
+    let json: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{}: {e}", file.display()))?;
+    let ns = json["median"]["point_estimate"].as_f64().ok_or_else(|| format!("{}: no median", file.display()))?;
+    Ok(ns * 1e-9)
+}
+
+/// A duration with three significant digits in a unit that suits it.
+fn duration(seconds: f64) -> String {
+    let (value, unit) = match seconds {
+        s if s >= 1.0 => (s, "s"),
+        s if s >= 1e-3 => (s * 1e3, "ms"),
+        s if s >= 1e-6 => (s * 1e6, "µs"),
+        s => (s * 1e9, "ns"),
+    };
+    let decimals = if value >= 100.0 {
+        0
+    } else if value >= 10.0 {
+        1
+    } else {
+        2
+    };
+    format!("{value:.decimals$} {unit}")
+}
+
+/// A whole number with a space between thousands, as the README writes them.
+fn grouped(n: f64) -> String {
+    let digits = format!("{:.0}", n.round());
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(' ');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// The tables, from the medians under `root` (target/criterion).
+pub fn tables(root: &Path) -> Result<String, String> {
+    let m = |id: &str| median(root, id);
+    let mut out = String::new();
+    out.push_str("| scenario (`cargo bench --bench …`) | hand-written | ctlgraph | ratio |\n|---|---|---|---|\n");
+    let per = |total: f64, count: f64, what: &str| format!("{} ({}/{what})", duration(total), duration(total / count));
+    let rows = [
+        (
+            "FLADRC paper, 2 s at h = 1e-4, 20 001 samples (`fladrc`)",
+            "fladrc_scenario_20k_samples/fladrc",
+            SCENARIO_SAMPLES,
+            "sample",
+        ),
+        ("LADRC paper, same scenario (`fladrc`)", "fladrc_scenario_20k_samples/ladrc", SCENARIO_SAMPLES, "sample"),
+        ("tutorial PID loop, RK4, 10 000 steps (`overhead`)", "pid_loop_10k_rk4_steps/", PID_STEPS, "step"),
+    ];
+    for (name, prefix, count, what) in rows {
+        let sep = if prefix.ends_with('/') { "" } else { "_" };
+        let (hand, graph) = (m(&format!("{prefix}{sep}hand_written"))?, m(&format!("{prefix}{sep}ctlgraph"))?);
+        let (hand_cell, graph_cell) = (per(hand, count, what), per(graph, count, what));
+        out.push_str(&format!("| {name} | {hand_cell} | {graph_cell} | {:.2}× |\n", graph / hand));
+    }
+    let (hand, fis) = (m("fuzzy_7x7_two_outputs/hand_written")?, m("fuzzy_7x7_two_outputs/ctlgraph_fis")?);
+    out.push_str(&format!(
+        "| the paper's 7×7 two-output fuzzy system, one evaluation (`fladrc`) | {} | {} | {:.2}× |\n\n",
+        duration(hand),
+        duration(fis),
+        fis / hand
+    ));
+    out.push_str(
+        "| n | compile, chain | compile, fan-out (2n blocks) | ns per block-step, chain (RK4) |\n|---|---|---|---|\n",
+    );
+    for n in [10u32, 1_000, 100_000] {
+        let (chain, fan) = (m(&format!("chain_compile/{n}"))?, m(&format!("fan_out_compile/{n}"))?);
+        let step = m(&format!("chain_100_steps/{n}"))? / (SCALING_STEPS * f64::from(n)) * 1e9;
+        out.push_str(&format!("| {} | {} | {} | {step:.0} |\n", grouped(f64::from(n)), duration(chain), duration(fan)));
+    }
+    let (one, two) = (m("pid_loop_sweep_400_cases/jobs_1")?, m("pid_loop_sweep_400_cases/jobs_2")?);
+    out.push_str(&format!(
+        "\nSweep of 400 cases (`sweep`): {} on one job ({} cases/s), {} on two ({} cases/s), a {:.1}× speed-up.\n",
+        duration(one),
+        grouped(400.0 / one),
+        duration(two),
+        grouped(400.0 / two),
+        one / two
+    ));
+    Ok(out)
+}

@@ -1,0 +1,62 @@
+//! The README's performance tables come from `examples/perf_table.rs`:
+//! it must read criterion's medians and divide them as the table says.
+
+#[allow(dead_code)]
+#[path = "../examples/perf_table.rs"]
+mod perf_table;
+
+use std::path::Path;
+
+fn write_median(root: &Path, id: &str, ns: f64) {
+    let dir = root.join(id).join("new");
+    std::fs::create_dir_all(&dir).unwrap();
+    let estimates = format!(r#"{{"mean":{{"point_estimate":1.0}},"median":{{"point_estimate":{ns}}}}}"#);
+    std::fs::write(dir.join("estimates.json"), estimates).unwrap();
+}
+
+#[test]
+fn tables_divide_the_medians_as_they_say() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path();
+    let ms = 1e6;
+    for (id, ns) in [
+        ("fladrc_scenario_20k_samples/fladrc_hand_written", 5.0 * ms),
+        ("fladrc_scenario_20k_samples/fladrc_ctlgraph", 10.0 * ms),
+        ("fladrc_scenario_20k_samples/ladrc_hand_written", 0.3 * ms),
+        ("fladrc_scenario_20k_samples/ladrc_ctlgraph", 3.0 * ms),
+        ("pid_loop_10k_rk4_steps/hand_written", 0.5 * ms),
+        ("pid_loop_10k_rk4_steps/ctlgraph", 1.5 * ms),
+        ("fuzzy_7x7_two_outputs/hand_written", 300.0),
+        ("fuzzy_7x7_two_outputs/ctlgraph_fis", 150.0),
+        ("chain_compile/10", 0.2 * ms),
+        ("chain_compile/1000", 20.0 * ms),
+        ("chain_compile/100000", 2000.0 * ms),
+        ("fan_out_compile/10", 0.3 * ms),
+        ("fan_out_compile/1000", 30.0 * ms),
+        ("fan_out_compile/100000", 3000.0 * ms),
+        ("chain_100_steps/10", 0.05 * ms),
+        ("chain_100_steps/1000", 5.0 * ms),
+        ("chain_100_steps/100000", 1000.0 * ms),
+        ("pid_loop_sweep_400_cases/jobs_1", 200.0 * ms),
+        ("pid_loop_sweep_400_cases/jobs_2", 100.0 * ms),
+    ] {
+        write_median(root, id, ns);
+    }
+    let text = perf_table::tables(root).unwrap();
+    // 10 ms over 20 001 samples is 500 ns a sample; twice the hand-written.
+    assert!(text.contains("| 5.00 ms (250 ns/sample) | 10.0 ms (500 ns/sample) | 2.00× |"), "{text}");
+    assert!(text.contains("| 300 µs (15.0 ns/sample) | 3.00 ms (150 ns/sample) | 10.00× |"), "{text}");
+    assert!(text.contains("| 500 µs (50.0 ns/step) | 1.50 ms (150 ns/step) | 3.00× |"), "{text}");
+    assert!(text.contains("| 300 ns | 150 ns | 0.50× |"), "{text}");
+    // 1 s for 100 steps of 100 000 blocks: 100 ns a block-step.
+    assert!(text.contains("| 100 000 | 2.00 s | 3.00 s | 100 |"), "{text}");
+    assert!(text.contains("| 10 | 200 µs | 300 µs | 50 |"), "{text}");
+    assert!(
+        text.contains("200 ms on one job (2 000 cases/s), 100 ms on two (4 000 cases/s), a 2.0× speed-up"),
+        "{text}"
+    );
+    // A bench not run yet is named, with what to do.
+    std::fs::remove_dir_all(root.join("pid_loop_sweep_400_cases")).unwrap();
+    let err = perf_table::tables(root).unwrap_err();
+    assert!(err.contains("pid_loop_sweep_400_cases/jobs_1") && err.contains("run the benches first"), "{err}");
+}
