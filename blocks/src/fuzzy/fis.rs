@@ -209,10 +209,12 @@ impl Fis {
         sugeno: bool,
     ) -> Self {
         let m = methods.resolution.max(2);
-        let grids: Vec<Vec<f64>> = outputs
-            .iter()
-            .map(|v| (0..m).map(|j| v.lo + (v.hi - v.lo) * j as f64 / (m - 1) as f64).collect())
-            .collect();
+        // The last point is the upper edge itself, as numpy's linspace makes
+        // it: lo + (hi − lo)·1 can land an ulp past hi, outside a right
+        // shoulder term (Tri(a, hi, hi) is 0 beyond hi).
+        let point =
+            |v: &Variable, j: usize| if j == m - 1 { v.hi } else { v.lo + (v.hi - v.lo) * j as f64 / (m - 1) as f64 };
+        let grids: Vec<Vec<f64>> = outputs.iter().map(|v| (0..m).map(|j| point(v, j)).collect()).collect();
         let term_grids: Vec<Vec<Vec<f64>>> = outputs
             .iter()
             .zip(&grids)

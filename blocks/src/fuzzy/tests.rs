@@ -446,3 +446,26 @@ fn centroid_on_the_grid_equals_the_trapezoid_centroid() {
         }
     }
 }
+
+/// The output grid's last point is the universe's upper edge itself (as
+/// numpy's linspace, which scikit-fuzzy uses): lo + (hi − lo)·6/6 lands an
+/// ulp past hi on this universe, where a right-shoulder term Tri(lo, hi, hi)
+/// is 0, and the centroid of the term alone moved from 2/3 of the way
+/// along the universe to 0.61 of it at resolution 7.
+#[test]
+fn the_output_grid_ends_on_the_upper_edge() {
+    let (lo, hi) = (-1.2012497033478038, 1.7151805398233817);
+    assert!(lo + (hi - lo) * 6.0 / 6.0 > hi);
+    let input = Variable { name: "a".into(), lo: 0.0, hi: 1.0, terms: uniform_triangles(0.0, 1.0, &["N", "P"]) };
+    let output = Variable { name: "y".into(), lo, hi, terms: uniform_triangles(lo, hi, &["L", "H"]) };
+    let rule = Rule { antecedents: vec![(0, 1, false)], connective: Connective::And, consequents: vec![(0, 1)] };
+    let mut fis =
+        Fis::new(vec![input], vec![output], vec![rule], Methods { resolution: 7, ..Default::default() }, false);
+    let mut y = [f64::NAN];
+    fis.eval(&[1.0], &mut y);
+    // μ_j = j/6 on x_j = lo + j·(hi − lo)/6, the last one 1.
+    let x: Vec<f64> = (0..7).map(|j| if j == 6 { hi } else { lo + (hi - lo) * j as f64 / 6.0 }).collect();
+    let mu: Vec<f64> = (0..7).map(|j| j as f64 / 6.0).collect();
+    let want = defuzzify(&x, &mu, Defuzzification::Centroid).unwrap();
+    assert!((y[0] - want).abs() < 1e-12, "{} vs {want}", y[0]);
+}
