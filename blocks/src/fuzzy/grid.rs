@@ -77,9 +77,13 @@ pub struct RuleGrid {
 }
 
 impl RuleGrid {
-    /// `None` unless every input is a partition and every rule an AND of one
-    /// plain term of each input (and the table has at most 2¹⁶ cells).
+    /// `None` unless there are inputs, every input is a partition and every
+    /// rule an AND of one plain term of each input (and the table has at
+    /// most 2¹⁶ cells).
     pub fn new(inputs: &[Variable], rules: &[Rule], and: AndMethod) -> Option<Self> {
+        if inputs.is_empty() {
+            return None;
+        }
         let partitions = inputs.iter().map(Partition::of).collect::<Option<Vec<_>>>()?;
         let mut strides = Vec::with_capacity(inputs.len());
         let mut size = 1usize;
