@@ -126,10 +126,12 @@ const FUNC1: [(&str, Func1); 17] = [
 const FUNC2: [&str; 2] = ["atan2", "pow"];
 const VARIADIC: [&str; 2] = ["min", "max"];
 
-/// A compiled expression.
+/// A compiled expression: its tree, and the tree as a postfix program
+/// when its stack fits [`program::STACK`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Expr {
     root: Node,
+    program: Option<Vec<program::Instr>>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -146,7 +148,12 @@ enum Node {
 impl Expr {
     /// Parses `src`, resolving names through `scope`.
     pub fn parse(src: &str, scope: &dyn Scope) -> Result<Expr, ExprError> {
-        Ok(Expr { root: fold(parse::parse(src, scope)?) })
+        Ok(Expr::new(fold(parse::parse(src, scope)?)))
+    }
+
+    fn new(root: Node) -> Expr {
+        let (program, depth) = program::compile(&root);
+        Expr { program: (depth <= program::STACK).then_some(program), root }
     }
 
     /// The value, if the expression uses no variables.
@@ -173,7 +180,10 @@ impl Expr {
 
     /// Evaluates with `vars` bound to the slots handed out by the scope.
     pub fn eval(&self, vars: &[f64]) -> f64 {
-        eval(&self.root, vars)
+        match &self.program {
+            Some(program) => program::run(program, vars),
+            None => eval(&self.root, vars),
+        }
     }
 }
 
@@ -182,53 +192,55 @@ fn eval(node: &Node, vars: &[f64]) -> f64 {
         Node::Const(v) => *v,
         Node::Var(i) => vars[*i],
         Node::Neg(a) => -eval(a, vars),
-        Node::Bin(op, a, b) => {
-            let (a, b) = (eval(a, vars), eval(b, vars));
-            match op {
-                Op::Add => a + b,
-                Op::Sub => a - b,
-                Op::Mul => a * b,
-                Op::Div => a / b,
-                Op::Pow => a.powf(b),
-            }
-        }
-        Node::Call(f, a) => {
-            let a = eval(a, vars);
-            match f {
-                Func1::Sqrt => a.sqrt(),
-                Func1::Exp => a.exp(),
-                Func1::Ln => a.ln(),
-                Func1::Log10 => a.log10(),
-                Func1::Sin => a.sin(),
-                Func1::Cos => a.cos(),
-                Func1::Tan => a.tan(),
-                Func1::Asin => a.asin(),
-                Func1::Acos => a.acos(),
-                Func1::Atan => a.atan(),
-                Func1::Sinh => a.sinh(),
-                Func1::Cosh => a.cosh(),
-                Func1::Tanh => a.tanh(),
-                Func1::Abs => a.abs(),
-                // sign(0) = 0, as in MATLAB (f64::signum gives 1).
-                Func1::Sign => {
-                    if a > 0.0 {
-                        1.0
-                    } else if a < 0.0 {
-                        -1.0
-                    } else {
-                        0.0
-                    }
-                }
-                Func1::Floor => a.floor(),
-                Func1::Ceil => a.ceil(),
-            }
-        }
+        Node::Bin(op, a, b) => apply_bin(*op, eval(a, vars), eval(b, vars)),
+        Node::Call(f, a) => apply_func1(*f, eval(a, vars)),
         Node::Atan2(a, b) => eval(a, vars).atan2(eval(b, vars)),
         Node::MinMax { max, args } => {
             let mut it = args.iter().map(|a| eval(a, vars));
             let first = it.next().unwrap_or(f64::NAN);
             if *max { it.fold(first, f64::max) } else { it.fold(first, f64::min) }
         }
+    }
+}
+
+fn apply_bin(op: Op, a: f64, b: f64) -> f64 {
+    match op {
+        Op::Add => a + b,
+        Op::Sub => a - b,
+        Op::Mul => a * b,
+        Op::Div => a / b,
+        Op::Pow => a.powf(b),
+    }
+}
+
+fn apply_func1(f: Func1, a: f64) -> f64 {
+    match f {
+        Func1::Sqrt => a.sqrt(),
+        Func1::Exp => a.exp(),
+        Func1::Ln => a.ln(),
+        Func1::Log10 => a.log10(),
+        Func1::Sin => a.sin(),
+        Func1::Cos => a.cos(),
+        Func1::Tan => a.tan(),
+        Func1::Asin => a.asin(),
+        Func1::Acos => a.acos(),
+        Func1::Atan => a.atan(),
+        Func1::Sinh => a.sinh(),
+        Func1::Cosh => a.cosh(),
+        Func1::Tanh => a.tanh(),
+        Func1::Abs => a.abs(),
+        // sign(0) = 0, as in MATLAB (f64::signum gives 1).
+        Func1::Sign => {
+            if a > 0.0 {
+                1.0
+            } else if a < 0.0 {
+                -1.0
+            } else {
+                0.0
+            }
+        }
+        Func1::Floor => a.floor(),
+        Func1::Ceil => a.ceil(),
     }
 }
 
@@ -274,5 +286,6 @@ impl Scope for Constants<'_> {
 }
 
 mod parse;
+mod program;
 #[cfg(test)]
 mod tests;

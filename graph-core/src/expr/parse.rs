@@ -328,7 +328,7 @@ impl Parser<'_> {
         self.at += 1;
         let mut args = Vec::new();
         while self.eat(',') {
-            args.push(Expr { root: fold(self.expr()?) });
+            args.push(Expr::new(fold(self.expr()?)));
         }
         self.require(')')?;
         let slot = self.scope.signal_call(function, signal, args).map_err(|message| ExprError {

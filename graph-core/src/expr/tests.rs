@@ -68,3 +68,79 @@ fn errors_point_at_the_offending_character() {
         assert_eq!((e.offset, e.message.as_str()), (offset, message), "{src}");
     }
 }
+
+/// The postfix program gives the tree's value to the bit (or NaN where the
+/// tree gives NaN) for random expressions over three variables — every
+/// operator, function, atan2, min and max of one to four arguments — and
+/// an expression deeper than the program's stack falls back to the tree.
+#[test]
+fn the_program_evaluates_as_the_tree() {
+    // A small xorshift generator: the test needs no crate.
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = move |n: u64| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state % n
+    };
+    fn random(depth: u32, next: &mut dyn FnMut(u64) -> u64) -> Node {
+        if depth == 0 || next(4) == 0 {
+            return if next(2) == 0 {
+                Node::Var(next(3) as usize)
+            } else {
+                Node::Const(next(2001) as f64 / 100.0 - 10.0)
+            };
+        }
+        let sub = |next: &mut dyn FnMut(u64) -> u64| Box::new(random(depth - 1, next));
+        match next(6) {
+            0 => Node::Neg(sub(next)),
+            1 | 2 => {
+                let op = [Op::Add, Op::Sub, Op::Mul, Op::Div, Op::Pow][next(5) as usize];
+                Node::Bin(op, sub(next), sub(next))
+            }
+            3 => Node::Call(FUNC1[next(17) as usize].1, sub(next)),
+            4 => Node::Atan2(sub(next), sub(next)),
+            _ => {
+                let n = 1 + next(4) as usize;
+                Node::MinMax { max: next(2) == 0, args: (0..n).map(|_| random(depth - 1, next)).collect() }
+            }
+        }
+    }
+    let mut compared = 0;
+    for _ in 0..3000 {
+        let expr = Expr::new(random(6, &mut next));
+        let Some(program) = &expr.program else { continue };
+        for _ in 0..5 {
+            let vars = [next(2001) as f64 / 100.0 - 10.0, next(2001) as f64 / 1000.0, next(7) as f64 - 3.0];
+            let (by_program, by_tree) = (program::run(program, &vars), eval(&expr.root, &vars));
+            assert!(
+                by_program.to_bits() == by_tree.to_bits() || by_program.is_nan() && by_tree.is_nan(),
+                "{:?} at {vars:?}: {by_program} vs {by_tree}",
+                expr.root
+            );
+            compared += 1;
+        }
+    }
+    assert!(compared > 14_000, "{compared}");
+    // 2^2^…^2 nests to the right: 40 levels need a stack 40 deep.
+    let tower = vec!["x"; 40].join("^");
+    struct X;
+    impl Scope for X {
+        fn lookup(&self, name: &str) -> Option<Binding> {
+            (name == "x").then_some(Binding::Slot(0))
+        }
+        fn names(&self) -> Vec<String> {
+            vec!["x".into()]
+        }
+    }
+    let expr = Expr::parse(&tower, &X).unwrap();
+    assert!(expr.program.is_none());
+    assert_eq!(expr.eval(&[1.0]), 1.0);
+    assert!(Expr::parse("x^x^x", &X).unwrap().program.is_some());
+    // A tower of k needs exactly k slots: STACK fit, one more does not.
+    for (k, fits) in [(program::STACK, true), (program::STACK + 1, false)] {
+        let expr = Expr::parse(&vec!["x"; k].join("^"), &X).unwrap();
+        assert_eq!(expr.program.is_some(), fits, "tower of {k}");
+        assert_eq!(expr.eval(&[1.0]), 1.0);
+    }
+}
