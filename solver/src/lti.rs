@@ -95,6 +95,7 @@ impl StateSpace {
     }
 
     /// `dx = A x + B u` (also the next state of a discrete system).
+    #[inline]
     pub fn derivative(&self, x: &[f64], u: &[f64], dx: &mut [f64]) {
         for i in 0..self.n {
             let ax: f64 = (0..self.n).map(|j| self.a[i * self.n + j] * x[j]).sum();
@@ -104,6 +105,7 @@ impl StateSpace {
     }
 
     /// `y = C x + D u`.
+    #[inline]
     pub fn output(&self, x: &[f64], u: &[f64], y: &mut [f64]) {
         for i in 0..self.p {
             let cx: f64 = (0..self.n).map(|j| self.c[i * self.n + j] * x[j]).sum();
@@ -114,6 +116,7 @@ impl StateSpace {
 
     /// `y = C x` only, for systems without feedthrough (callable before the
     /// input of this step is known).
+    #[inline]
     pub fn output_state_only(&self, x: &[f64], y: &mut [f64]) {
         for i in 0..self.p {
             y[i] = (0..self.n).map(|j| self.c[i * self.n + j] * x[j]).sum();
