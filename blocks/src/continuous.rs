@@ -188,13 +188,22 @@ impl Block for Lti {
     fn output(&mut self, io: &mut Io) {
         if self.feedthrough {
             self.ss.output(io.x, io.input(0), &mut self.y);
+        } else if self.y.len() == 1 {
+            // One output without feedthrough (a transfer function): y = C·x,
+            // written straight to the port.
+            io.set(0, self.ss.output_state_only_scalar(io.x));
+            return;
         } else {
             self.ss.output_state_only(io.x, &mut self.y);
         }
         io.set_all(0, &self.y);
     }
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
-        self.ss.derivative(io.x, io.input(0), dx);
+        if self.ss.m == 1 {
+            self.ss.derivative_single_input(io.x, io.u(0), dx);
+        } else {
+            self.ss.derivative(io.x, io.input(0), dx);
+        }
     }
     fn lti(&self) -> Option<&StateSpace> {
         Some(&self.ss)

@@ -104,6 +104,16 @@ impl StateSpace {
         }
     }
 
+    /// `dx = A x + B u` for a single input (the same sums as `derivative`).
+    #[inline]
+    pub fn derivative_single_input(&self, x: &[f64], u: f64, dx: &mut [f64]) {
+        let n = self.n;
+        for (i, d) in dx.iter_mut().enumerate().take(n) {
+            let ax: f64 = (0..n).map(|j| self.a[i * n + j] * x[j]).sum();
+            *d = ax + self.b[i] * u;
+        }
+    }
+
     /// `y = C x + D u`.
     #[inline]
     pub fn output(&self, x: &[f64], u: &[f64], y: &mut [f64]) {
@@ -116,6 +126,12 @@ impl StateSpace {
 
     /// `y = C x` only, for systems without feedthrough (callable before the
     /// input of this step is known).
+    /// `y = C x` of a single-output system without feedthrough.
+    #[inline]
+    pub fn output_state_only_scalar(&self, x: &[f64]) -> f64 {
+        (0..self.n).map(|j| self.c[j] * x[j]).sum()
+    }
+
     #[inline]
     pub fn output_state_only(&self, x: &[f64], y: &mut [f64]) {
         for i in 0..self.p {
@@ -179,6 +195,31 @@ pub fn zpk2tf(zeros: &[Complex<f64>], poles: &[Complex<f64>], gain: f64) -> Resu
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The single-input and single-output shortcuts the `transfer_function`
+    /// block takes compute the general sums, to the bit.
+    #[test]
+    fn single_input_and_output_shortcuts_equal_the_general_sums() {
+        for (num, den) in
+            [(vec![1.639e4], vec![1.0, 154.8, 2.242e4]), (vec![2.0, -3.0, 0.5], vec![1.0, 0.3, -2.0, 7.0])]
+        {
+            let ss = tf2ss(&num, &den).unwrap();
+            for k in 0..50 {
+                let x: Vec<f64> = (0..ss.n).map(|j| ((k * 7 + j * 13) % 17) as f64 / 3.0 - 2.5).collect();
+                let u = (k as f64 - 25.0) / 7.0;
+                let (mut general, mut single) = (vec![0.0; ss.n], vec![0.0; ss.n]);
+                ss.derivative(&x, &[u], &mut general);
+                ss.derivative_single_input(&x, u, &mut single);
+                assert_eq!(
+                    general.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                    single.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                );
+                let mut y = [0.0];
+                ss.output_state_only(&x, &mut y);
+                assert_eq!(y[0].to_bits(), ss.output_state_only_scalar(&x).to_bits());
+            }
+        }
+    }
 
     /// Frequency response of a state-space SISO system at s = jω, via
     /// (jωI − A)⁻¹ by complex Gaussian elimination; cross-checks tf2ss.
