@@ -189,10 +189,8 @@ impl Block for Lti {
         if self.feedthrough {
             self.ss.output(io.x, io.input(0), &mut self.y);
         } else if self.y.len() == 1 {
-            // One output without feedthrough (a transfer function): y = C·x,
-            // written straight to the port.
-            io.set(0, self.ss.output_state_only_scalar(io.x));
-            return;
+            // A transfer function: y = C·x straight to the port.
+            return io.set(0, self.ss.output_state_only_scalar(io.x));
         } else {
             self.ss.output_state_only(io.x, &mut self.y);
         }

@@ -97,47 +97,49 @@ impl StateSpace {
     /// `dx = A x + B u` (also the next state of a discrete system).
     #[inline]
     pub fn derivative(&self, x: &[f64], u: &[f64], dx: &mut [f64]) {
-        for i in 0..self.n {
-            let ax: f64 = (0..self.n).map(|j| self.a[i * self.n + j] * x[j]).sum();
-            let bu: f64 = (0..self.m).map(|j| self.b[i * self.m + j] * u[j]).sum();
-            dx[i] = ax + bu;
+        for (i, d) in dx.iter_mut().enumerate().take(self.n) {
+            *d = row_times(&self.a, self.n, i, x) + row_times(&self.b, self.m, i, u);
         }
     }
 
-    /// `dx = A x + B u` for a single input (the same sums as `derivative`).
+    /// [`StateSpace::derivative`] of a single-input system, u a number (the
+    /// same sums: Σ over one term is that term).
     #[inline]
     pub fn derivative_single_input(&self, x: &[f64], u: f64, dx: &mut [f64]) {
-        let n = self.n;
-        for (i, d) in dx.iter_mut().enumerate().take(n) {
-            let ax: f64 = (0..n).map(|j| self.a[i * n + j] * x[j]).sum();
-            *d = ax + self.b[i] * u;
+        for (i, d) in dx.iter_mut().enumerate().take(self.n) {
+            *d = row_times(&self.a, self.n, i, x) + self.b[i] * u;
         }
     }
 
     /// `y = C x + D u`.
     #[inline]
     pub fn output(&self, x: &[f64], u: &[f64], y: &mut [f64]) {
-        for i in 0..self.p {
-            let cx: f64 = (0..self.n).map(|j| self.c[i * self.n + j] * x[j]).sum();
-            let du: f64 = (0..self.m).map(|j| self.d[i * self.m + j] * u[j]).sum();
-            y[i] = cx + du;
+        for (i, yi) in y.iter_mut().enumerate().take(self.p) {
+            *yi = row_times(&self.c, self.n, i, x) + row_times(&self.d, self.m, i, u);
         }
     }
 
     /// `y = C x` only, for systems without feedthrough (callable before the
     /// input of this step is known).
-    /// `y = C x` of a single-output system without feedthrough.
-    #[inline]
-    pub fn output_state_only_scalar(&self, x: &[f64]) -> f64 {
-        (0..self.n).map(|j| self.c[j] * x[j]).sum()
-    }
-
     #[inline]
     pub fn output_state_only(&self, x: &[f64], y: &mut [f64]) {
-        for i in 0..self.p {
-            y[i] = (0..self.n).map(|j| self.c[i * self.n + j] * x[j]).sum();
+        for (i, yi) in y.iter_mut().enumerate().take(self.p) {
+            *yi = row_times(&self.c, self.n, i, x);
         }
     }
+
+    /// [`StateSpace::output_state_only`] of a single-output system.
+    #[inline]
+    pub fn output_state_only_scalar(&self, x: &[f64]) -> f64 {
+        row_times(&self.c, self.n, 0, x)
+    }
+}
+
+/// Row `i` of a row-major matrix with `cols` columns times `v`, summed in
+/// index order.
+#[inline]
+fn row_times(matrix: &[f64], cols: usize, i: usize, v: &[f64]) -> f64 {
+    (0..cols).map(|j| matrix[i * cols + j] * v[j]).sum()
 }
 
 /// Realises `num(s)/den(s)` (descending powers) in controllable canonical
