@@ -9,6 +9,7 @@ use ctlgraph::record::{Trace, write_atomic};
 use ctlgraph::report::sha256_hex;
 use ctlgraph::suite::Failure;
 use ctlgraph_core::Diagnostic;
+use ctlgraph_core::files::{MAX_GRAPH_FILE, read_text};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -18,9 +19,10 @@ pub(crate) fn report(csv: &Path, json: &Path, html: &Path) -> Result<(), Failure
             return Err(Diagnostic::plain(format!("--html {}: that is {flag}", html.display())).into());
         }
     }
-    let read =
-        |p: &Path| std::fs::read(p).map_err(|e| Failure::Invalid(Diagnostic::plain(format!("{}: {e}", p.display()))));
-    let run: Value = serde_json::from_slice(&read(json)?).map_err(|e| {
+    let read = |p: &Path| {
+        read_text(p, MAX_GRAPH_FILE).map_err(|e| Failure::Invalid(Diagnostic::plain(format!("{}: {e}", p.display()))))
+    };
+    let run: Value = serde_json::from_str(&read(json)?).map_err(|e| {
         Diagnostic::plain(format!("{}: not a run report: {e}", json.display()))
             .with_hint("write one with `ctlgraph run GRAPH --report run.json`")
     })?;
@@ -31,9 +33,9 @@ pub(crate) fn report(csv: &Path, json: &Path, html: &Path) -> Result<(), Failure
         Diagnostic::plain(format!("{}: the run's graph {file} is not found", json.display()))
             .with_hint("run `ctlgraph report` from the folder the run was made in")
     })?;
-    let bytes = read(&graph)?;
+    let text = read(&graph)?;
     let mut notes = Vec::new();
-    if run["graph"]["sha256"].as_str().is_some_and(|h| h != sha256_hex(&bytes)) {
+    if run["graph"]["sha256"].as_str().is_some_and(|h| h != sha256_hex(text.as_bytes())) {
         notes.push(format!(
             "{} changed since the run (its SHA-256 differs): the diagram and parameters shown are today's",
             graph.display()
@@ -79,6 +81,8 @@ fn locate(file: &str, json: &Path) -> Option<PathBuf> {
 /// row per logged step.
 fn read_trace(path: &Path) -> Result<Trace, Failure> {
     let bad = |m: String| Failure::Invalid(Diagnostic::plain(format!("{}: {m}", path.display())));
+    // Read as a stream, so any size of run; but a device never ends.
+    ctlgraph_core::files::regular_file(path).map_err(|e| bad(e.to_string()))?;
     let mut reader = csv::Reader::from_path(path).map_err(|e| bad(e.to_string()))?;
     let headers: Vec<String> = reader.headers().map_err(|e| bad(e.to_string()))?.iter().map(String::from).collect();
     if headers.first().map(String::as_str) != Some("t") {

@@ -96,7 +96,7 @@ fn walk(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
 /// Whether a file parses as a graph with a non-empty `checks:` list. Files
 /// that do not parse count as having checks, so their errors are reported.
 fn has_checks(path: &Path) -> bool {
-    let Ok(text) = std::fs::read_to_string(path) else { return true };
+    let Ok(text) = ctlgraph_core::files::read_text(path, ctlgraph_core::files::MAX_GRAPH_FILE) else { return true };
     GraphFile::parse(&text, path.display().to_string().into()).map_or(true, |g| !g.checks.is_empty())
 }
 

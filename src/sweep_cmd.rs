@@ -62,7 +62,7 @@ pub(crate) fn sweep(graph: &Path, a: SweepArgs) -> Result<(), Failure> {
     let Some(out) = a.out.clone() else {
         return Err(Diagnostic::plain("sweep needs --out FILE.csv for the results table").into());
     };
-    let text = std::fs::read_to_string(graph)
+    let text = ctlgraph_core::files::read_text(graph, ctlgraph_core::files::MAX_GRAPH_FILE)
         .map_err(|e| Diagnostic::plain(format!("{}: cannot read: {e}", graph.display())))?;
     let vary = a.vary.iter().map(|v| Vary::parse(v)).collect::<Result<Vec<_>, _>>()?;
     let seeds = a.seeds.as_deref().map(|s| pair::<u64>("--seeds", s, "..")).transpose()?;

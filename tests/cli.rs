@@ -429,3 +429,33 @@ fn a_pulse_too_fast_for_its_run_is_refused() {
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("block `p`: events 5e-301 s apart give 1e299 steps"), "{}", text(&out.stderr));
 }
+
+/// A device or FIFO named as a graph, an include or a run's file is
+/// refused before reading (reading /dev/zero never ends and exhausted
+/// memory; a FIFO waited forever).
+#[test]
+fn devices_and_fifos_are_refused_not_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("fifo.yaml");
+    assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let including = dir.path().join("top.yaml");
+    std::fs::write(&including, "blocks:\n  s: { type: subsystem, file: /dev/zero }\n").unwrap();
+    let html = dir.path().join("r.html");
+    for args in [
+        vec!["run", "/dev/zero"],
+        vec!["check", path(&fifo)],
+        vec!["sweep", "/dev/zero", "--vary", "k=1..2:2", "--out", "s.csv"],
+        vec!["report", "/dev/zero", "--json", "/dev/zero", "--html", path(&html)],
+    ] {
+        let out = ctlgraph(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(
+            text(&out.stderr).contains("not a regular file (a device, FIFO or folder)"),
+            "{args:?}: {}",
+            text(&out.stderr)
+        );
+    }
+    let out = ctlgraph(&["check", path(&including)]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("cannot read `/dev/zero`: not a regular file"), "{}", text(&out.stderr));
+}

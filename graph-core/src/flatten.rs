@@ -103,7 +103,8 @@ enum Override {
 /// pairs; naming a parameter the graph does not have is an error.
 pub fn load(path: &Path, overrides: &[(String, String)]) -> Result<FlatGraph, Diagnostic> {
     let file: Arc<str> = path.display().to_string().into();
-    let text = std::fs::read_to_string(path).map_err(|e| Diagnostic::in_file(&file, format!("cannot read: {e}")))?;
+    let text = crate::files::read_text(path, crate::files::MAX_GRAPH_FILE)
+        .map_err(|e| Diagnostic::in_file(&file, format!("cannot read: {e}")))?;
     load_str(&text, file, overrides)
 }
 

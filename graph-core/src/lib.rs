@@ -11,6 +11,7 @@ pub mod checks;
 pub mod compile;
 pub mod diag;
 pub mod expr;
+pub mod files;
 pub mod flatten;
 pub mod linearize;
 pub mod params;

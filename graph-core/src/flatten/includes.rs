@@ -37,7 +37,7 @@ impl Includes {
         if let Some(g) = self.parsed.get(canon) {
             return Ok(g.clone());
         }
-        let text = std::fs::read_to_string(path).map_err(IncludeError::Read)?;
+        let text = crate::files::read_text(path, crate::files::MAX_GRAPH_FILE).map_err(IncludeError::Read)?;
         let g = Arc::new(GraphFile::parse(&text, path.display().to_string().into()).map_err(IncludeError::Parse)?);
         self.parsed.insert(canon.to_path_buf(), g.clone());
         Ok(g)
