@@ -198,14 +198,14 @@ pub(crate) fn read_columns(
     limit: u64,
 ) -> Result<(Vec<f64>, Vec<f64>), String> {
     let shown = path.display();
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
-    if !meta.is_file() {
-        return Err(format!("`{shown}` is not a regular file (a device, FIFO or folder): give a CSV file"));
-    }
-    if meta.len() > limit {
+    let len = ctlgraph_core::files::regular_file(path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::InvalidInput => format!("`{shown}` is {e}: give a CSV file"),
+        _ => format!("cannot read `{shown}`: {e}"),
+    })?;
+    if len > limit {
         return Err(format!(
             "`{shown}` is {} MiB, above the limit of {} MiB for data files (raise `max_file_mib` if it is the right file)",
-            meta.len().div_ceil(1 << 20),
+            len.div_ceil(1 << 20),
             limit >> 20
         ));
     }
