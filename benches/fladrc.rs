@@ -14,6 +14,10 @@ use nalgebra::Matrix3;
 use std::hint::black_box;
 use std::path::Path;
 
+/// The command line's allocator (src/main.rs), so the benches measure what it does.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 const H: f64 = 1.0e-4;
 const SAMPLES: usize = 20_000;
 /// Plant 1.639e4 / (s² + 154.8 s + 2.242e4), controllable canonical form.

@@ -9,6 +9,10 @@ use ctlgraph_core::Simulator;
 use ctlgraph_solver::{Integrator, Method, OdeSystem};
 use std::hint::black_box;
 
+/// The command line's allocator (src/main.rs), so the benches measure what it does.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 const STEP: f64 = 1.0e-4;
 const STEPS: usize = 10_000;
 

@@ -12,6 +12,10 @@ use ctlgraph_core::Simulator;
 use std::fmt::Write;
 use std::hint::black_box;
 
+/// The command line's allocator (src/main.rs), so the benches measure what it does.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 const STEPS: usize = 100;
 
 /// The settings and the source every generated graph starts with.

@@ -8,6 +8,10 @@ use ctlgraph::sweep::{self, Keep, SweepSpec, Vary};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
+/// The command line's allocator (src/main.rs), so the benches measure what it does.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn bench(c: &mut Criterion) {
     let file = Path::new("graphs/tutorial/pid_loop.yaml");
     let text = std::fs::read_to_string(file).expect("the tutorial graph");

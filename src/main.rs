@@ -20,6 +20,13 @@ use std::process::ExitCode;
 use std::time::Instant;
 use sweep_cmd::{SweepArgs, sweep, sweep_merge};
 
+/// Loading and compiling a graph allocate a little per YAML node and per
+/// block; mimalloc makes a 100 000-block graph compile ~1.4x faster than
+/// the system allocator does (README, Performance). The step loop does not
+/// allocate, so simulation speed does not depend on it.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 #[derive(Parser)]
 #[command(name = "ctlgraph", version, about = "Declarative control graphs: block diagrams as YAML, simulated headless")]
 struct Cli {

@@ -54,6 +54,21 @@ pub(super) fn instantiate<'g>(g: &'g FlatGraph, reg: &Registry) -> Result<Vec<No
 }
 
 pub(super) fn port_index(node: &Node, ep: &Endpoint, input: bool) -> Result<usize, Diagnostic> {
+    let (inputs, outputs) = (&node.iface.inputs, &node.iface.outputs);
+    let found = |p: &str| match input {
+        true => inputs.iter().position(|q| q.name == p),
+        false => outputs.iter().position(|q| q.name == p),
+    };
+    match &ep.port {
+        _ if node.is_virtual => Ok(0),
+        Some(p) => found(p).ok_or_else(|| port_error(node, ep, input)),
+        None if (if input { inputs.len() } else { outputs.len() }) == 1 => Ok(0),
+        None => Err(port_error(node, ep, input)),
+    }
+}
+
+/// Why an endpoint names no port of its block, with the ports it has.
+fn port_error(node: &Node, ep: &Endpoint, input: bool) -> Diagnostic {
     let names: Vec<&str> = if input {
         node.iface.inputs.iter().map(|p| p.name.as_str()).collect()
     } else {
@@ -62,20 +77,16 @@ pub(super) fn port_index(node: &Node, ep: &Endpoint, input: bool) -> Result<usiz
     let side = if input { "input" } else { "output" };
     let what = format!("block `{}` ({})", node.flat.path, node.flat.spec.type_name);
     match &ep.port {
-        _ if node.is_virtual => Ok(0),
-        Some(p) => names.iter().position(|n| n == p).ok_or_else(|| {
+        Some(p) => {
             let listing =
                 if names.is_empty() { format!("it has no {side}s") } else { format!("{side}s: {}", names.join(", ")) };
             Diagnostic::at(&ep.pos, format!("{what} has no {side} `{p}`"))
                 .suggest(p, names.iter().copied())
                 .or_hint(&listing)
-        }),
-        None if names.len() == 1 => Ok(0),
-        None if names.is_empty() => Err(Diagnostic::at(&ep.pos, format!("{what} has no {side}s"))),
-        None => {
-            Err(Diagnostic::at(&ep.pos, format!("{what} has {} {side}s: name one as `{}.PORT`", names.len(), ep.block))
-                .with_hint(format!("{side}s: {}", names.join(", "))))
         }
+        None if names.is_empty() => Diagnostic::at(&ep.pos, format!("{what} has no {side}s")),
+        None => Diagnostic::at(&ep.pos, format!("{what} has {} {side}s: name one as `{}.PORT`", names.len(), ep.block))
+            .with_hint(format!("{side}s: {}", names.join(", "))),
     }
 }
 
