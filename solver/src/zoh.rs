@@ -84,19 +84,29 @@ impl Zoh {
         let (n, m) = (self.ss.n, self.ss.m);
         let slot = self.transition(dt);
         let Transition { phi, gamma, .. } = &self.cache[slot];
-        for i in 0..n {
-            let mut v = 0.0;
-            for j in 0..n {
-                v += phi[i * n + j] * x[j];
+        match (n, m) {
+            // One input and a few states (a transfer function's usual
+            // realisation): sizes known to the compiler, the loops unrolled.
+            (1, 1) => step_single_input::<1>(phi, gamma, x, u[0]),
+            (2, 1) => step_single_input::<2>(phi, gamma, x, u[0]),
+            (3, 1) => step_single_input::<3>(phi, gamma, x, u[0]),
+            (4, 1) => step_single_input::<4>(phi, gamma, x, u[0]),
+            _ => {
+                for i in 0..n {
+                    let mut v = 0.0;
+                    for j in 0..n {
+                        v += phi[i * n + j] * x[j];
+                    }
+                    for j in 0..m {
+                        v += gamma[i * m + j] * u[j];
+                    }
+                    self.x_next[i] = v;
+                }
+                // A loop, not copy_from_slice: for a few states a memmove call costs more.
+                for (xi, &v) in x.iter_mut().zip(&self.x_next) {
+                    *xi = v;
+                }
             }
-            for j in 0..m {
-                v += gamma[i * m + j] * u[j];
-            }
-            self.x_next[i] = v;
-        }
-        // A loop, not copy_from_slice: for a few states a memmove call costs more.
-        for (xi, &v) in x.iter_mut().zip(&self.x_next) {
-            *xi = v;
         }
     }
 
@@ -180,6 +190,21 @@ fn multiply(a: &[f64], b: &[f64], c: &mut [f64], k: usize) {
                 }
             }
         }
+    }
+}
+
+/// `x ← Φ·x + γ·u` for N states and one input: the general loop's sums,
+/// in the same order, with N fixed.
+#[inline]
+fn step_single_input<const N: usize>(phi: &[f64], gamma: &[f64], x: &mut [f64], u: f64) {
+    let now: [f64; N] = std::array::from_fn(|j| x[j]);
+    let (phi, gamma) = (&phi[..N * N], &gamma[..N]);
+    for i in 0..N {
+        let mut v = 0.0;
+        for j in 0..N {
+            v += phi[i * N + j] * now[j];
+        }
+        x[i] = v + gamma[i] * u;
     }
 }
 
