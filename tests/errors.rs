@@ -2,7 +2,7 @@
 //! names the block and key, and offers a hint where one helps.
 
 mod common;
-use common::error;
+use common::{error, run};
 
 /// Asserts position, a message fragment, and optionally a hint fragment.
 fn check(yaml: &str, line: u32, col: u32, message: &str, hint: Option<&str>) {
@@ -460,6 +460,22 @@ fn size_parameters_have_stated_limits() {
     let mux = "blocks:\n  u: { type: step }\n  m: { type: mux, widths: [100000000] }\nwires: [u -> m]\n";
     let d = error(mux);
     assert!(d.message.contains("whole numbers from 1 to 1e6"), "{d}");
+}
+
+#[test]
+fn anchors_and_merge_keys_share_block_settings() {
+    // The README's example ("The graph file", YAML): `fast` is `slow` with kp = 4.
+    let trace = run("simulation: { stop: 0.01, solver: { method: rk4, step: 0.001 } }
+blocks:
+  e:    { type: constant, value: 1 }
+  slow: &pi { type: pid, kp: 2, ki: 15 }
+  fast: { <<: *pi, kp: 4 }
+wires: [e -> slow, e -> fast]
+");
+    assert_eq!((trace.at("slow", 0.0), trace.at("fast", 0.0)), (Some(2.0), Some(4.0)));
+    // A key merged where it does not fit is reported where it is written.
+    let d = error("blocks:\n  a: &p { type: gain, k: 2 }\n  b: { <<: *p, type: integrator }\nwires: []\n");
+    assert_eq!(d.pos.as_ref().map(|p| (p.line, p.col)), Some((2, 23)), "{d}");
 }
 
 #[test]
