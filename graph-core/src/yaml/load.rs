@@ -18,8 +18,10 @@ pub const MAX_YAML_NODES: usize = 20_000_000;
 pub const MAX_YAML_DEPTH: usize = 64;
 /// Most aliases (`*name`) in a file.
 pub const MAX_ALIASES: usize = 50_000;
-/// Most nodes that aliases may copy in all: far more than any hand-written
-/// sharing, far fewer than an alias bomb (`a: [*b, *b, …]` nested) makes.
+/// Most nodes that anchors and aliases may copy in all (an anchored value
+/// is kept, and each alias copies it): far more than any hand-written
+/// sharing, far fewer than an alias bomb (`a: [*b, *b, …]` nested) or
+/// anchors nested in anchors make.
 pub const MAX_ALIAS_NODES: usize = 1_000_000;
 
 /// A collection being filled.
@@ -58,6 +60,12 @@ impl MapFrame {
                 format!("duplicate key `{}`: names and keys must be unique within a mapping", key.name),
             ));
         }
+        self.push(key, value);
+        Ok(())
+    }
+
+    /// Adds an entry whose key is not in the mapping yet.
+    fn push(&mut self, key: Key, value: Yaml) {
         if let Some(names) = &mut self.names {
             names.insert(key.name.clone());
         } else if self.entries.len() + 1 >= LINEAR_SEARCH {
@@ -66,14 +74,12 @@ impl MapFrame {
             self.names = Some(names);
         }
         self.entries.push((key, value));
-        Ok(())
     }
 
     /// The mapping with its `<<` merges applied: keys written in the
     /// mapping win, then the first merged mapping that has the key.
     fn finish(mut self) -> Result<Yaml, Diagnostic> {
         let merges = std::mem::take(&mut self.merges);
-        let mut merged: Vec<(Key, Yaml)> = Vec::new();
         for source in merges {
             let maps = match source.kind {
                 Kind::Map(entries) => vec![entries],
@@ -87,12 +93,11 @@ impl MapFrame {
                 _ => return Err(merge_error(&source.pos, source.describe())),
             };
             for (key, value) in maps.into_iter().flatten() {
-                if !self.has(&key.name) && !merged.iter().any(|(k, _)| k.name == key.name) {
-                    merged.push((key, value));
+                if !self.has(&key.name) {
+                    self.push(key, value);
                 }
             }
         }
-        self.entries.extend(merged);
         Ok(Yaml { pos: self.pos, kind: Kind::Map(self.entries) })
     }
 }
@@ -119,7 +124,8 @@ struct Loader {
     documents: usize,
     nodes: usize,
     aliases: usize,
-    alias_nodes: usize,
+    /// Nodes copied for anchors and aliases.
+    copied: usize,
 }
 
 /// Parses one YAML document into the positioned tree.
@@ -132,7 +138,7 @@ pub fn load(text: &str, file: &Arc<str>) -> Result<Yaml, Diagnostic> {
         documents: 0,
         nodes: 0,
         aliases: 0,
-        alias_nodes: 0,
+        copied: 0,
     };
     let mut end = Pos::new(file.clone(), 1, 1);
     for event in Parser::new_from_str(text) {
@@ -192,6 +198,7 @@ impl Loader {
                 // so that positions inside an expression line up.
                 let pos = if starts_with_quote(span, text) { pos.shifted(1) } else { pos };
                 if anchor != 0 {
+                    self.copy(1, &pos)?;
                     let node = Yaml { pos: pos.clone(), kind: kind.clone() };
                     self.anchors.insert(anchor, Anchored { node, size: 1, text: Some(value.into_owned()) });
                 }
@@ -243,6 +250,15 @@ impl Loader {
         Ok(())
     }
 
+    /// Counts `n` nodes copied for an anchor or an alias.
+    fn copy(&mut self, n: usize, pos: &Pos) -> Result<(), Diagnostic> {
+        self.copied += n;
+        if self.copied > MAX_ALIAS_NODES {
+            return Err(copy_error(pos));
+        }
+        Ok(())
+    }
+
     fn key(&mut self, key: Key, anchor: usize) {
         if anchor != 0 {
             let node = Yaml { pos: key.pos.clone(), kind: Kind::Str(key.name.clone()) };
@@ -256,7 +272,9 @@ impl Loader {
     /// Places a finished node in the collection being filled (or as the document).
     fn value(&mut self, node: Yaml, anchor: usize) -> Result<(), Diagnostic> {
         if anchor != 0 {
-            self.anchors.insert(anchor, Anchored { node: node.clone(), size: size(&node), text: None });
+            let size = size(&node);
+            self.copy(size, &node.pos)?;
+            self.anchors.insert(anchor, Anchored { node: node.clone(), size, text: None });
         }
         match self.stack.last_mut() {
             Some(Frame::Seq { items, .. }) => items.push(node),
@@ -279,15 +297,13 @@ impl Loader {
         let Some(anchored) = self.anchors.get(&id) else {
             return Err(Diagnostic::at(&pos, "YAML syntax: unknown anchor"));
         };
+        let size = anchored.size;
         self.aliases += 1;
-        self.alias_nodes += anchored.size;
-        if self.aliases > MAX_ALIASES || self.alias_nodes > MAX_ALIAS_NODES {
-            return Err(Diagnostic::at(
-                &pos,
-                format!("YAML aliases copy too much (limit {MAX_ALIASES} aliases, {MAX_ALIAS_NODES} copied nodes)"),
-            )
-            .with_hint("an alias copies its anchor's whole value; nested aliases multiply"));
+        if self.aliases > MAX_ALIASES {
+            return Err(copy_error(&pos));
         }
+        self.copy(size, &pos)?;
+        let anchored = &self.anchors[&id];
         if self.wants_key() {
             let Some(name) = anchored.text.clone() else {
                 return Err(Diagnostic::at(&pos, "a mapping key must be a name, not a list or a mapping"));
@@ -297,10 +313,18 @@ impl Loader {
         }
         // The copy sits at the alias; the nodes inside keep the positions
         // where they are written, which is where a mistake in them is.
-        let (kind, size) = (anchored.node.kind.clone(), anchored.size);
+        let kind = anchored.node.kind.clone();
         self.count(size, &pos)?;
         self.value(Yaml { pos, kind }, 0)
     }
+}
+
+fn copy_error(pos: &Pos) -> Diagnostic {
+    Diagnostic::at(
+        pos,
+        format!("YAML anchors and aliases copy too much (limit {MAX_ALIASES} aliases, {MAX_ALIAS_NODES} copied nodes)"),
+    )
+    .with_hint("an alias copies its anchor's whole value; nested aliases multiply")
 }
 
 /// Whether a scalar's source starts with a quote.
@@ -347,6 +371,10 @@ mod tests {
         assert_eq!(keys(c), ["z", "w", "x", "y"]);
         let num = |k| lookup(c.as_map().unwrap(), k).unwrap().kind.clone();
         assert_eq!((num("x"), num("w")), (Kind::Num(1.0), Kind::Num(9.0)));
+        // A long merged mapping is merged in linear time.
+        let long: String = (0..30_000).map(|i| format!("k{i}: {i}, ")).collect();
+        let y = parse(&format!("a: &a {{ {long} }}\nb: {{ <<: *a, k7: 0 }}\n")).unwrap();
+        assert_eq!(lookup(y.as_map().unwrap(), "b").unwrap().as_map().unwrap().len(), 30_000);
         assert!(
             error("a: { <<: 5 }\n")
                 .contains("t.yaml:1:10: `<<` merges a mapping or a list of mappings, found a number")
@@ -371,7 +399,11 @@ mod tests {
         assert!(parse(&format!("k: &k {{ type: gain, k: 2 }}\n{shared}")).is_ok());
         let many: String = (0..MAX_ALIASES).map(|i| format!("g{i}: *k\n")).collect();
         assert!(parse(&format!("k: &k 1\n{many}")).is_ok());
-        assert!(error(&format!("k: &k 1\n{many}x: *k\n")).contains("YAML aliases copy too much"));
+        assert!(error(&format!("k: &k 1\n{many}x: *k\n")).contains("YAML anchors and aliases copy too much"));
+        // Anchors nested in anchors each keep a copy: counted too.
+        let nested = format!("{}1{}", "&a [".repeat(60), "]".repeat(60));
+        let wide: String = (0..20_000).map(|i| format!("{i}, ")).collect();
+        assert!(error(&nested.replace('1', &format!("[{wide}]"))).contains("copy too much"));
     }
 
     #[test]
