@@ -64,6 +64,26 @@ fn elementwise_math_on_vectors_with_scalar_broadcast() {
 }
 
 #[test]
+fn scalar_sums_and_gains_run_in_place_as_their_blocks_would() {
+    // The scheduler runs scalar sums and gains from their kernels (no call
+    // into the block), in major and minor steps; vector ones go through
+    // `output`. x' = 3t - 1 is read in RK4's stages, which integrate it
+    // exactly (to rounding).
+    let yaml = graph(
+        "  k: { type: clock }\n  one: { type: constant, value: 1 }\n  g: { type: gain, k: 3 }\n\
+         \x20 s: { type: sum, signs: \"+-\" }\n  x: { type: integrator }\n\
+         \x20 two: { type: constant, value: [1, 2] }\n  v: { type: sum, signs: \"-+\" }\n",
+        "k -> g, g -> s.u1, one -> s.u2, s -> x, two -> v.u1, s -> v.u2",
+        "s, x, v",
+    );
+    let trace = run(&yaml);
+    assert_eq!(max_error(&trace, "s", |t| 3.0 * t - 1.0), 0.0);
+    assert!(max_error(&trace, "x", |t| 1.5 * t * t - t) < 1e-12);
+    assert_eq!(max_error(&trace, "v[1]", |t| 3.0 * t - 1.0 - 1.0), 0.0);
+    assert_eq!(max_error(&trace, "v[2]", |t| 3.0 * t - 1.0 - 2.0), 0.0);
+}
+
+#[test]
 fn matrix_gain_and_routing() {
     let yaml = graph(
         "  a: { type: constant, value: 1 }\n  b: { type: constant, value: [2, 3] }\n\

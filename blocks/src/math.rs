@@ -8,7 +8,7 @@ use ctlgraph_core::expr::Expr;
 use ctlgraph_core::params::{VarScope, expr_diagnostic};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::yaml::Kind;
-use ctlgraph_core::{Block, Crossing, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Crossing, Diagnostic, Interface, Io, Kernel, Params, SampleTime, Width};
 
 const UN: &[PortDoc] = &[PortDoc { name: "u1 … un", doc: "any widths; scalars broadcast" }];
 const Y_ELEMENTWISE: &[PortDoc] = &[PortDoc { name: "y", doc: "width of the widest input" }];
@@ -190,11 +190,18 @@ impl Block for Gain {
         }
     }
 
+    fn kernel(&self) -> Option<Kernel> {
+        match self {
+            Gain::Elementwise(k) if k.len() == 1 => Some(Kernel::Scale(k[0])),
+            _ => None,
+        }
+    }
+
     fn output(&mut self, io: &mut Io) {
         match self {
             Gain::Elementwise(k) => {
-                for (i, ki) in k.iter().enumerate() {
-                    let v = ki * io.u_at(0, i);
+                for (i, &ki) in k.iter().enumerate() {
+                    let v = Kernel::Scale(ki).eval(io.u_at(0, i), 0.0);
                     io.set_at(0, i, v);
                 }
             }
@@ -241,6 +248,12 @@ impl Block for Sum {
     fn updates(&self) -> bool {
         false
     }
+    fn kernel(&self) -> Option<Kernel> {
+        match self.signs[..] {
+            [a, b] => Some(Kernel::Affine2(a, b)),
+            _ => None,
+        }
+    }
     fn output(&mut self, io: &mut Io) {
         if self.signs.len() == 1 {
             let s: f64 = io.input(0).iter().sum();
@@ -251,7 +264,7 @@ impl Block for Sum {
             && io.output_width(0) == 1
         {
             // The common two-input case, the same sum as below.
-            io.set(0, a * io.u(0) + b * io.u(1));
+            io.set(0, Kernel::Affine2(a, b).eval(io.u(0), io.u(1)));
             return;
         }
         if io.output_width(0) == 1 {

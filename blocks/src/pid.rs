@@ -65,6 +65,7 @@ pub struct PidLaw {
 }
 
 impl PidLaw {
+    #[inline]
     fn gains(&self, io: &Io) -> [f64; 3] {
         let g = [self.kp, self.ki, self.kd];
         std::array::from_fn(|i| self.gain_ports[i].map_or(g[i], |p| io.u(p)))

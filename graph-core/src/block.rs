@@ -307,6 +307,39 @@ impl<'a> Io<'a> {
     }
 }
 
+/// A memoryless scalar computation that a block's `output` performs. The
+/// scheduler runs it in place of [`Block::output`] — no view, no dynamic
+/// call — when the block's ports are all scalar: the common sums and
+/// gains of a diagram then cost what the hand-written line does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Kernel {
+    /// y = k·u0
+    Scale(f64),
+    /// y = a·u0 + b·u1
+    Affine2(f64, f64),
+}
+
+impl Kernel {
+    /// How many inputs it reads.
+    pub fn arity(&self) -> usize {
+        match self {
+            Kernel::Scale(_) => 1,
+            Kernel::Affine2(..) => 2,
+        }
+    }
+
+    /// y from the inputs (`u1` unused by `Scale`). Blocks with a kernel
+    /// compute their scalar output through this, so both paths agree to
+    /// the bit.
+    #[inline]
+    pub fn eval(&self, u0: f64, u1: f64) -> f64 {
+        match *self {
+            Kernel::Scale(k) => k * u0,
+            Kernel::Affine2(a, b) => a * u0 + b * u1,
+        }
+    }
+}
+
 /// A block of the library. See the module docs for when each method runs.
 /// Blocks are `Clone` (derive it): a snapshot of a run
 /// ([`crate::Simulator::state`]) copies every block's memory.
@@ -327,6 +360,13 @@ pub trait Block: Send + dyn_clone::DynClone {
 
     /// Computes the outputs from the inputs, `io.x` and discrete state.
     fn output(&mut self, io: &mut Io);
+
+    /// The memoryless scalar computation `output` performs, if it is one
+    /// (see [`Kernel`]); asked after `set_width`. A block that returns one
+    /// must have no state and compute exactly it for scalar ports.
+    fn kernel(&self) -> Option<Kernel> {
+        None
+    }
 
     /// Advances discrete state (or major-step memory) after outputs.
     fn update(&mut self, _io: &mut Io) {}

@@ -23,7 +23,7 @@ pub mod trace;
 pub mod yaml;
 
 pub use block::Crossing;
-pub use block::{Block, Interface, Io, SampleTime, Width};
+pub use block::{Block, Interface, Io, Kernel, SampleTime, Width};
 pub use compile::{Model, compile};
 pub use diag::{Diagnostic, Pos};
 pub use flatten::{FlatGraph, SimConfig, ZeroCrossing, load, load_str};

@@ -1,7 +1,7 @@
 //! The system the ODE solver integrates between major steps: continuous
 //! outputs recomputed at each stage, discrete outputs held.
 
-use super::io_for;
+use super::{Inline, io_for};
 use crate::compile::Model;
 use ctlgraph_solver::OdeSystem;
 
@@ -13,6 +13,8 @@ pub(super) struct Minor<'a> {
     pub(super) signals: &'a mut [f64],
     pub(super) continuous: &'a [usize],
     pub(super) stateful: &'a [usize],
+    /// Per block: its kernel, run in place of `output`.
+    pub(super) inline: &'a [Option<Inline>],
     pub(super) t_end: f64,
 }
 
@@ -22,6 +24,10 @@ impl Minor<'_> {
         let m = &mut *self.model;
         let left = t >= self.t_end;
         for &i in self.continuous {
+            if let Some(kernel) = &self.inline[i] {
+                kernel.run(self.signals);
+                continue;
+            }
             let meta = &m.slots[i];
             let mut io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
             m.blocks[i].output(&mut io);

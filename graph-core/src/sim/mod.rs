@@ -17,7 +17,7 @@ mod minor;
 pub use error::SimError;
 pub use host::Snapshot;
 
-use crate::block::{Io, Port};
+use crate::block::{Io, Kernel, Port};
 use crate::compile::{Between, Model, Rate, Slot};
 use ctlgraph_solver::{Integrator, Method, SolverError, Stats, Zoh};
 pub use events::MAX_CONSECUTIVE_EVENTS;
@@ -112,6 +112,8 @@ pub struct Simulator {
     /// runs (or runs at its clock's hits): neither constant nor event-only.
     every: Vec<usize>,
     regular: Vec<usize>,
+    /// Per block: its kernel, run in place of `output` (see [`Inline`]).
+    inline: Vec<Option<Inline>>,
     /// Whether this major step is at a block event (see `Between::event_only`).
     at_event: bool,
     /// A host set an input since the last outputs (see [`Simulator::set_input`]).
@@ -185,6 +187,7 @@ impl Simulator {
             regular: (0..model.blocks.len())
                 .filter(|&i| model.slots[i].rate != Rate::Constant && !model.between.event_only[i])
                 .collect(),
+            inline: (0..model.blocks.len()).map(|i| Inline::of(&model, i)).collect(),
             at_event: true,
             inputs_changed: false,
             pause: f64::INFINITY,
@@ -299,6 +302,10 @@ impl Simulator {
         for &i in order {
             let slot = &m.slots[i];
             if due(slot.rate, &self.clocks, self.first) {
+                if let Some(kernel) = &self.inline[i] {
+                    kernel.run(&mut self.signals);
+                    continue;
+                }
                 let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
                 m.blocks[i].output(&mut io);
             }
@@ -402,6 +409,7 @@ impl Simulator {
             signals: &mut self.signals,
             continuous: &self.between.minor,
             stateful: &self.between.integrated,
+            inline: &self.inline,
             t_end: target,
         };
         let x = &mut self.x[..self.between.n_integrated];
@@ -543,6 +551,39 @@ fn due(rate: Rate, clocks: &[Clock], constant_too: bool) -> bool {
         Rate::Continuous => true,
         Rate::Constant => constant_too,
         Rate::Discrete(c) => clocks[c].hit,
+    }
+}
+
+/// A block whose output the step loop computes in place: its
+/// [`Kernel`] and where its scalar inputs and output are in the signal
+/// buffer. Worth it for the small blocks (sums, gains) that make up much of
+/// a diagram: a call through a view costs several times their arithmetic.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Inline {
+    kernel: Kernel,
+    u0: usize,
+    u1: usize,
+    y: usize,
+}
+
+impl Inline {
+    /// Block `i`'s kernel, when it has one and its ports are scalar.
+    fn of(model: &Model, i: usize) -> Option<Inline> {
+        let kernel = model.blocks[i].kernel()?;
+        let slot = &model.slots[i];
+        let (ins, outs) = (&model.in_ports[slot.inputs.clone()], &model.out_ports[slot.outputs.clone()]);
+        let scalar = ins.iter().chain(outs).all(|p| p.width == 1);
+        (scalar && ins.len() == kernel.arity() && outs.len() == 1).then(|| Inline {
+            kernel,
+            u0: ins[0].offset,
+            u1: ins[ins.len() - 1].offset,
+            y: outs[0].offset,
+        })
+    }
+
+    #[inline]
+    pub(super) fn run(&self, signals: &mut [f64]) {
+        signals[self.y] = self.kernel.eval(signals[self.u0], signals[self.u1]);
     }
 }
 
