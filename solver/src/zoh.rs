@@ -291,6 +291,35 @@ mod tests {
         assert_eq!(zoh.exponentials_computed(), 4);
     }
 
+    #[test]
+    fn one_input_systems_step_as_the_general_loop_does() {
+        // Orders 1-4 take the fixed-size path, 5 the general loop: each is
+        // x ← Φx + γu summed in index order, to the bit.
+        for order in 1..=5 {
+            let den: Vec<f64> = (0..=order).map(|k| [1.0, 7.0, 19.0, 25.0, 16.0, 4.0][k]).collect();
+            let ss = tf2ss(&[2.0, 1.0], &den).unwrap();
+            let mut zoh = Zoh::new(ss);
+            let (phi, gamma) = {
+                let (p, g) = zoh.matrices(0.01);
+                (p.to_vec(), g.to_vec())
+            };
+            let mut x: Vec<f64> = (0..order).map(|i| 0.3 - 0.2 * i as f64).collect();
+            for k in 0..20 {
+                let u = (k as f64 * 0.7).sin();
+                let mut want = vec![0.0; order];
+                for (i, w) in want.iter_mut().enumerate() {
+                    let mut v = 0.0;
+                    for j in 0..order {
+                        v += phi[i * order + j] * x[j];
+                    }
+                    *w = v + gamma[i] * u;
+                }
+                zoh.step(0.01, &mut x, &[u]);
+                assert_eq!(x, want, "order {order}, step {k}");
+            }
+        }
+    }
+
     /// The FLADRC paper's plant 1.639e4/(s² + 154.8 s + 2.242e4) under a unit
     /// step, h = 1e-4: y(k) from scipy 1.17.1's
     /// `cont2discrete((A, B, C, D), 1e-4, method='zoh')` recursion (values
