@@ -308,9 +308,9 @@ impl<'a> Io<'a> {
 }
 
 /// A memoryless scalar computation that a block's `output` performs. The
-/// scheduler runs it in place of [`Block::output`] — no view, no dynamic
-/// call — when the block's ports are all scalar: the common sums and
-/// gains of a diagram then cost what the hand-written line does.
+/// scheduler runs it in place of [`Block::output`] when the block's ports
+/// are all scalar, so the common sums and gains of a diagram skip the view
+/// and the dynamic call that cost several times their arithmetic.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Kernel {
     /// y = k·u0
