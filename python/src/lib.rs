@@ -13,6 +13,12 @@ use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard};
 
+/// The command line's allocator (see src/main.rs): compiling a graph
+/// allocates per node, and mimalloc makes it ~1.4x faster. Only the
+/// extension's own (Rust) allocations use it; Python's objects do not.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 create_exception!(
     ctlgraph,
     GraphError,
