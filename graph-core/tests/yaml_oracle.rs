@@ -293,6 +293,12 @@ const EDGES: &[&str] = &[
     "a: { b: 1, b: 2 }\n",
     "<<: 5\n",
     "a: [ &x 1, *x, *x ]\n",
+    "\u{feff}a: 1\nb: [x, y]\n",
+    "a: 1\r\nb:\r\n  - x\r\n  - \"y\"\r\n",
+    "---\n",
+    "a:\n  b: 1\n c: 2\n",
+    "a: \"\\u00e9t\u{e9}\" # comment\nb: '\u{3c9}\u{2080}'\n",
+    "\"quoted key\": 1\n'single': 2\n",
 ];
 
 #[test]
