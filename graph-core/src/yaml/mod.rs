@@ -11,7 +11,7 @@
 //! → 0.49 G); what remains is mostly the parser itself.
 
 mod load;
-pub mod scalar;
+mod scalar;
 
 pub use load::{MAX_ALIAS_NODES, MAX_ALIASES, MAX_YAML_DEPTH, MAX_YAML_NODES};
 
@@ -91,7 +91,7 @@ pub fn lookup<'a>(map: &'a [(Key, Yaml)], name: &str) -> Option<&'a Yaml> {
 
 /// Parses a YAML document; syntax errors carry their position. Scalars
 /// are typed by YAML 1.2's core schema with booleans spelled `true` and
-/// `false` only (see [`scalar`]).
+/// `false` only (module `scalar`).
 pub fn parse(text: &str, file: &Arc<str>) -> Result<Yaml, Diagnostic> {
     load::load(text, file)
 }
