@@ -1,7 +1,8 @@
 //! The system the ODE solver integrates between major steps: continuous
 //! outputs recomputed at each stage, discrete outputs held.
 
-use super::{Inline, io_for};
+use super::inline::Inline;
+use super::io_for;
 use crate::compile::Model;
 use ctlgraph_solver::OdeSystem;
 

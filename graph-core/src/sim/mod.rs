@@ -13,15 +13,17 @@
 mod error;
 mod events;
 mod host;
+mod inline;
 mod minor;
 pub use error::SimError;
 pub use host::Snapshot;
 
-use crate::block::{Io, Kernel, Port};
+use crate::block::{Io, Port};
 use crate::compile::{Between, Model, Rate, Slot};
 use ctlgraph_solver::{Integrator, Method, SolverError, Stats, Zoh};
 pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
+use inline::Inline;
 use minor::Minor;
 
 /// The times k·h of a grid with step h. When h is the reciprocal of a
@@ -551,39 +553,6 @@ fn due(rate: Rate, clocks: &[Clock], constant_too: bool) -> bool {
         Rate::Continuous => true,
         Rate::Constant => constant_too,
         Rate::Discrete(c) => clocks[c].hit,
-    }
-}
-
-/// A block whose output the step loop computes in place: its
-/// [`Kernel`] and where its scalar inputs and output are in the signal
-/// buffer. Worth it for the small blocks (sums, gains) that make up much of
-/// a diagram: a call through a view costs several times their arithmetic.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Inline {
-    kernel: Kernel,
-    u0: usize,
-    u1: usize,
-    y: usize,
-}
-
-impl Inline {
-    /// Block `i`'s kernel, when it has one and its ports are scalar.
-    fn of(model: &Model, i: usize) -> Option<Inline> {
-        let kernel = model.blocks[i].kernel()?;
-        let slot = &model.slots[i];
-        let (ins, outs) = (&model.in_ports[slot.inputs.clone()], &model.out_ports[slot.outputs.clone()]);
-        let scalar = ins.iter().chain(outs).all(|p| p.width == 1);
-        (scalar && ins.len() == kernel.arity() && outs.len() == 1).then(|| Inline {
-            kernel,
-            u0: ins[0].offset,
-            u1: ins[ins.len() - 1].offset,
-            y: outs[0].offset,
-        })
-    }
-
-    #[inline]
-    pub(super) fn run(&self, signals: &mut [f64]) {
-        signals[self.y] = self.kernel.eval(signals[self.u0], signals[self.u1]);
     }
 }
 

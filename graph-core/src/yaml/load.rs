@@ -279,7 +279,10 @@ impl Loader {
         match self.stack.last_mut() {
             Some(Frame::Seq { items, .. }) => items.push(node),
             Some(Frame::Map(map)) => {
-                let key = map.key.take().expect("a value follows its key");
+                // Values reach a mapping only after their key (see `wants_key`).
+                let Some(key) = map.key.take() else {
+                    return Err(Diagnostic::at(&node.pos, "YAML syntax: a value without a key"));
+                };
                 if key.name == "<<" {
                     map.merges.push(node);
                 } else {
