@@ -3,6 +3,7 @@
 //! inputs (output membership values on the sampled universe) is computed
 //! once; `eval` writes into preallocated buffers and allocates nothing.
 
+use super::centroid::{PartitionCentroid, centroid_on_grid};
 use super::grid::RuleGrid;
 use std::ops::Range;
 
@@ -178,6 +179,9 @@ pub struct Fis {
     grids: Vec<Vec<f64>>,
     term_grids: Vec<Vec<Vec<f64>>>,
     supports: Vec<Vec<Range<usize>>>,
+    /// Per output: its centroid in closed form, when its terms are a
+    /// triangular partition and the methods allow (see `centroid`).
+    exact: Vec<Option<PartitionCentroid>>,
     /// Where each input's term memberships start in `membership`.
     offsets: Vec<usize>,
     /// Rules that fire only when one given membership is nonzero (an AND
@@ -240,8 +244,14 @@ impl Fis {
             }
         }
         let most_terms = outputs.iter().map(|v| v.terms.len()).max().unwrap_or(0);
+        let closed_form = !sugeno && methods.defuzzification == Defuzzification::Centroid;
+        let exact = outputs
+            .iter()
+            .map(|v| PartitionCentroid::new(v, m, methods.implication, methods.aggregation).filter(|_| closed_form))
+            .collect();
         Fis {
             grid: RuleGrid::new(&inputs, &rules, methods.and),
+            exact,
             clipped: vec![0.0; inputs.len()],
             membership: vec![0.0; n_memberships],
             fired: vec![(0, 0.0); rules.len()],
@@ -268,6 +278,19 @@ impl Fis {
     pub(super) fn without_rule_grid(mut self) -> Self {
         self.grid = None;
         self
+    }
+
+    /// The same system with every output aggregated on its grid (the
+    /// reference the closed-form centroid is tested against).
+    #[cfg(test)]
+    pub(super) fn on_the_grid(mut self) -> Self {
+        self.exact.iter_mut().for_each(|e| *e = None);
+        self
+    }
+
+    /// Whether output `o`'s centroid is computed in closed form (see `centroid`).
+    pub fn has_exact_centroid(&self, o: usize) -> bool {
+        self.exact.get(o).is_some_and(Option::is_some)
     }
 
     /// Whether the rules that fire are found from a table (see `grid`).
@@ -352,11 +375,15 @@ impl Fis {
     /// Per term T, max_r imp(w_r, μ_T) = imp(max_r w_r, μ_T) over the rules
     /// concluding T (implication is monotone) and Σ_r w_r·μ_T = (Σ_r w_r)·μ_T,
     /// so the grid is visited once per firing term, not once per rule; only
-    /// sum aggregation of min implication needs the rules one by one.
+    /// sum aggregation of min implication needs the rules one by one. When
+    /// the output's terms are a triangular partition, the centroid comes in
+    /// closed form from the term strengths instead (see `centroid`).
     fn mamdani_output(&mut self, o: usize) -> f64 {
-        let Fis { fired, n_fired, rules, term_strength, aggregate, term_grids, supports, methods, .. } = self;
+        let Fis { fired, n_fired, rules, term_strength, aggregate, term_grids, supports, methods, exact, .. } = self;
         let (terms, supports, fired) = (&term_grids[o], &supports[o], &fired[..*n_fired]);
         let (imp, agg) = (methods.implication, methods.aggregation);
+        let v = &self.outputs[o];
+        let midpoint = (v.lo + v.hi) / 2.0;
         // The implied sets are zero outside their term's support: only the
         // union of the firing terms' supports is written and read.
         let (mut from, mut to) = (usize::MAX, 0);
@@ -366,14 +393,18 @@ impl Fis {
             imply_and_aggregate(&mut aggregate[s.clone()], &terms[t][s], w, imp, agg);
         };
         if !(agg == Aggregation::Sum && imp == Implication::Min) {
-            term_strength[..terms.len()].iter_mut().for_each(|w| *w = 0.0);
+            let strength = &mut term_strength[..terms.len()];
+            strength.iter_mut().for_each(|w| *w = 0.0);
             for (t, s) in Self::conclusions(fired, rules, o) {
-                term_strength[t] = match agg {
-                    Aggregation::Max => term_strength[t].max(s),
-                    Aggregation::Sum => term_strength[t] + s,
+                strength[t] = match agg {
+                    Aggregation::Max => strength[t].max(s),
+                    Aggregation::Sum => strength[t] + s,
                 };
             }
-            for (t, &w) in term_strength[..terms.len()].iter().enumerate() {
+            if let Some(exact) = &exact[o] {
+                return exact.centroid(strength).unwrap_or(midpoint);
+            }
+            for (t, &w) in strength.iter().enumerate() {
                 if w > 0.0 {
                     apply(t, w);
                 }
@@ -383,8 +414,6 @@ impl Fis {
                 apply(t, s);
             }
         }
-        let v = &self.outputs[o];
-        let midpoint = (v.lo + v.hi) / 2.0;
         if from >= to {
             return midpoint;
         }
@@ -425,46 +454,6 @@ fn imply_and_aggregate(aggregate: &mut [f64], mu: &[f64], w: f64, imp: Implicati
         (Implication::Min, Aggregation::Sum) => pairs.for_each(|(a, &m)| *a += if w < m { w } else { m }),
         (Implication::Product, Aggregation::Sum) => pairs.for_each(|(a, &m)| *a += w * m),
     }
-}
-
-/// The centroid of the piecewise-linear μ sampled on the uniform grid
-/// x_j = lo + j·dx, j = 0 … L (scikit-fuzzy's trapezoids; `defuzzify`),
-/// from the samples in `range` (μ is zero outside). Per segment, area =
-/// dx·(μ_j + μ_{j+1})/2 and moment = dx/2·[(μ_j + μ_{j+1})·x_j +
-/// dx·(μ_j + 2μ_{j+1})/3]; summed over the grid, each inner sample weighs
-/// dx in the area and dx·x_j in the moment, the end ones half that with a
-/// correction of ±dx²/6. With S0 = Σ μ_j, S1 = Σ j·μ_j:
-///
-///   centroid = lo + dx·(S1 + μ_0/6 − μ_L·(L/2 + 1/6)) / (S0 − (μ_0 + μ_L)/2)
-///
-/// Two running sums without weight arrays, four lanes each so the loop
-/// vectorises. `None` when the area is zero.
-pub(super) fn centroid_on_grid(mu: &[f64], range: Range<usize>, lo: f64, hi: f64) -> Option<f64> {
-    let last = mu.len() - 1;
-    let first_value = if range.start == 0 { mu[0] } else { 0.0 };
-    let last_value = if range.end == mu.len() { mu[last] } else { 0.0 };
-    let from = range.start as f64;
-    let samples = &mu[range];
-    let (mut s0, mut s1) = ([0.0f64; 4], [0.0f64; 4]);
-    let chunks = samples.chunks_exact(4);
-    let tail = chunks.remainder();
-    let mut index = [0.0, 1.0, 2.0, 3.0];
-    for c in chunks {
-        for k in 0..4 {
-            s0[k] += c[k];
-            s1[k] += index[k] * c[k];
-            index[k] += 4.0;
-        }
-    }
-    let (mut sum, mut moment) = ((s0[0] + s0[1]) + (s0[2] + s0[3]), (s1[0] + s1[1]) + (s1[2] + s1[3]));
-    for (k, &v) in tail.iter().enumerate() {
-        sum += v;
-        moment += index[k] * v;
-    }
-    // Σ j·μ_j with j = from + local index.
-    let moment = from * sum + moment + first_value / 6.0 - last_value * (last as f64 / 2.0 + 1.0 / 6.0);
-    let area = sum - 0.5 * (first_value + last_value);
-    (area > 0.0).then(|| lo + (hi - lo) / last as f64 * moment / area)
 }
 
 /// Defuzzifies a sampled membership function; `None` when it is zero

@@ -7,60 +7,11 @@
 //! those two terms can be nonzero, and which they are is arithmetic (no
 //! comparison per term); with n inputs only the 2ⁿ cells of the table at
 //! those terms can fire. The memberships are computed with the same
-//! expressions as [`Mf::eval`], so the fired strengths are the general
+//! expressions as `Mf::eval`, so the fired strengths are the general
 //! path's to the bit.
 
-use super::fis::{AndMethod, Connective, Mf, Rule, Variable};
-
-/// One input's partition: its peaks, strictly increasing.
-#[derive(Clone, Debug)]
-struct Partition {
-    peaks: Vec<f64>,
-    /// The mean spacing, for the first guess of where an input falls.
-    per_step: f64,
-}
-
-impl Partition {
-    /// `None` unless the terms are a triangular partition covering [lo, hi]:
-    /// Tri(p_{k−1}, p_k, p_{k+1}) with p_{−1} = p_0 and p_n = p_{n−1}.
-    fn of(v: &Variable) -> Option<Self> {
-        let corners = v.terms.iter().map(|(_, mf)| match *mf {
-            Mf::Tri(a, b, c) => Some((a, b, c)),
-            _ => None,
-        });
-        let corners = corners.collect::<Option<Vec<_>>>()?;
-        let peaks: Vec<f64> = corners.iter().map(|c| c.1).collect();
-        let n = peaks.len();
-        let peak = |k: usize| peaks[k.min(n - 1)];
-        let chained =
-            corners.iter().enumerate().all(|(k, &(a, _, c))| a == peak(k.saturating_sub(1)) && c == peak(k + 1));
-        let increasing = peaks.windows(2).all(|w| w[0] < w[1]);
-        let covers = n >= 2 && peaks[0] <= v.lo && v.hi <= peaks[n - 1];
-        (chained && increasing && covers)
-            .then(|| Partition { per_step: (n - 1) as f64 / (peaks[n - 1] - peaks[0]), peaks })
-    }
-
-    /// The k with peak k ≤ x < peak k+1 (k ≤ n − 2), and the memberships of
-    /// terms k and k+1 at x, as `Mf::eval` computes them.
-    fn locate(&self, x: f64) -> (usize, f64, f64) {
-        let p = &self.peaks;
-        let last = p.len() - 2;
-        let mut k = (((x - p[0]) * self.per_step).max(0.0) as usize).min(last);
-        while k > 0 && x < p[k] {
-            k -= 1;
-        }
-        while k < last && x >= p[k + 1] {
-            k += 1;
-        }
-        if x == p[k] {
-            (k, 1.0, 0.0)
-        } else if x == p[k + 1] {
-            (k, 0.0, 1.0)
-        } else {
-            (k, (p[k + 1] - x) / (p[k + 1] - p[k]), (x - p[k]) / (p[k + 1] - p[k]))
-        }
-    }
-}
+use super::fis::{AndMethod, Connective, Rule, Variable};
+use super::partition::Partition;
 
 /// The rule table over the inputs' partitions.
 #[derive(Clone, Debug)]

@@ -2,8 +2,10 @@
 //! system described in YAML (variables, terms, rules as tables or as
 //! sentences), compiled once and evaluated without allocation.
 
+mod centroid;
 pub mod fis;
 mod grid;
+mod partition;
 
 use crate::{SAMPLE_TIME_INHERITED, param};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
@@ -26,6 +28,10 @@ pub const TYPES: &[BlockType] = &[BlockType {
           probor) over the antecedents, `implication` (min | product), `aggregation` (max | sum) on \
           `resolution` points of each output universe, then `defuzzification`: centroid or \
           bisector of the piecewise-linear aggregate (scikit-fuzzy's convention), mom, som or lom. \
+          When an output's terms are a triangular partition (each term reaching its neighbours' \
+          peaks, as the N-term shorthand makes them) and the method is centroid with min/max, \
+          product/max or product/sum, the sampled aggregate's centroid is computed in closed form, \
+          piece by linear piece, without visiting the points: the same number to rounding. \
           Sugeno: weighted average of the consequents' constants. With no rule firing an output is \
           the middle of its universe (as MATLAB).\n\
           Bounds: every output stays inside its universe.",
