@@ -234,8 +234,37 @@ impl Leso {
         &self.z
     }
 
-    /// One forward-Euler step (discrete form).
+    /// One forward-Euler step (discrete form). The observer orders the
+    /// block accepts (1–3) step in fixed-size loops the compiler unrolls:
+    /// the same operations in the same order as the general loop, without
+    /// its bounds checks (tested bit for bit).
     pub fn step(&mut self, y: f64, u: f64) {
+        match self.z.len() {
+            2 => self.step_fixed::<2>(y, u),
+            3 => self.step_fixed::<3>(y, u),
+            4 => self.step_fixed::<4>(y, u),
+            _ => self.step_general(y, u),
+        }
+    }
+
+    fn step_fixed<const N: usize>(&mut self, y: f64, u: f64) {
+        let (Ok(z), Ok(beta)) = (<&mut [f64; N]>::try_from(&mut self.z[..]), <&[f64; N]>::try_from(&self.beta[..]))
+        else {
+            return self.step_general(y, u);
+        };
+        let e = z[0] - y;
+        let mut dz = [0.0; N];
+        for i in 0..N - 1 {
+            dz[i] = z[i + 1] - beta[i] * e;
+        }
+        dz[N - 2] += self.b0 * u;
+        dz[N - 1] = -beta[N - 1] * e;
+        for i in 0..N {
+            z[i] += self.h * dz[i];
+        }
+    }
+
+    fn step_general(&mut self, y: f64, u: f64) {
         let mut dz = std::mem::take(&mut self.dz);
         self.derivative(&self.z, y, u, &mut dz);
         for (z, d) in self.z.iter_mut().zip(&dz) {

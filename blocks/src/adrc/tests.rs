@@ -231,3 +231,21 @@ fn the_continuous_leso_outputs_its_states_and_their_derivatives() {
     assert_eq!(dz, [-3.5, 2.5, -3.5]);
     assert_eq!(signals[2..], x);
 }
+
+#[test]
+fn fixed_size_leso_steps_as_the_general_loop_does() {
+    // Orders 1–3 take the unrolled path; bit for bit the general loop's.
+    for order in 1..=3 {
+        let n = order + 1;
+        let initial: Vec<f64> = (0..n).map(|i| 0.1 * i as f64 - 0.05).collect();
+        let mut fixed = Leso::new(bandwidth_gains(order, 150.0), 3.0, 2e-3, initial.clone());
+        let mut general = fixed.clone();
+        for k in 0..200 {
+            let (y, u) = ((0.37 * k as f64).sin(), 0.5 - (0.11 * k as f64).cos());
+            fixed.step(y, u);
+            general.step_general(y, u);
+            assert_eq!(fixed.state(), general.state(), "order {order}, step {k}");
+        }
+        assert!(fixed.state().iter().any(|&z| z != 0.0));
+    }
+}
