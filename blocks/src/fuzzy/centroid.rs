@@ -100,12 +100,8 @@ impl Sums {
 /// functions evaluated point by point; tested to 1e-12 of the universe).
 #[derive(Clone, Debug)]
 pub(super) struct PartitionCentroid {
-    /// Per peak: its place on the grid's index axis, (p_k − lo)/dx, and
-    /// the first grid point at or after it (0 before lo, L + 1 past hi).
-    /// Cell edges are found once, so neighbouring pieces and cells agree on
-    /// which grid points are whose.
-    at: Vec<f64>,
-    first: Vec<i64>,
+    /// Per pair of neighbouring peaks, the cell between them.
+    cells: Vec<Cell>,
     /// Index L of the last grid point.
     last: i64,
     lo: f64,
@@ -124,51 +120,55 @@ impl PartitionCentroid {
         let peaks = Partition::of(v)?.peaks;
         let last = points as i64 - 1;
         let step = (v.hi - v.lo) / last as f64;
-        let at: Vec<f64> = peaks.iter().map(|p| (p - v.lo) / step).collect();
-        let first = peaks
-            .iter()
-            .zip(&at)
-            .map(|(&p, &j)| {
-                if p <= v.lo {
-                    0
-                } else if p >= v.hi {
-                    last + 1
-                } else {
-                    ceil(j).min(last)
-                }
+        let at = |p: f64| (p - v.lo) / step;
+        let first = |p: f64| {
+            if p <= v.lo {
+                0
+            } else if p >= v.hi {
+                last + 1
+            } else {
+                ceil(at(p)).min(last)
+            }
+        };
+        let cells = peaks
+            .windows(2)
+            .map(|p| Cell {
+                at: at(p[0]),
+                span: at(p[1]) - at(p[0]),
+                per_point: 1.0 / (at(p[1]) - at(p[0])),
+                first: first(p[0]),
+                end: first(p[1]),
             })
             .collect();
-        Some(PartitionCentroid { at, first, last, lo: v.lo, hi: v.hi, implication, aggregation })
+        Some(PartitionCentroid { cells, last, lo: v.lo, hi: v.hi, implication, aggregation })
     }
 
     /// The centroid of the aggregate of the terms at `strength` (one per
     /// term); `None` when it is zero everywhere.
     pub(super) fn centroid(&self, strength: &[f64]) -> Option<f64> {
         let mut sums = Sums::default();
-        for (k, w) in strength.windows(2).enumerate() {
+        for (cell, w) in self.cells.iter().zip(strength.windows(2)) {
             if w[0] > 0.0 || w[1] > 0.0 {
-                self.add_cell(k, w[0], w[1], &mut sums);
+                self.add_cell(cell, w[0], w[1], &mut sums);
             }
         }
         sums.centroid(self.lo, self.hi, self.last as f64)
     }
 
-    /// Adds the grid points between peaks k and k+1, where terms k and k+1
+    /// Adds the grid points of `cell`, where its falling and rising terms
     /// have strengths `wa` and `wb`.
-    fn add_cell(&self, k: usize, wa: f64, wb: f64, sums: &mut Sums) {
-        let (a, end) = (self.first[k], self.first[k + 1]);
-        if a >= end {
+    fn add_cell(&self, cell: &Cell, wa: f64, wb: f64, sums: &mut Sums) {
+        let Cell { at, span, per_point, first, end } = *cell;
+        if first >= end {
             return;
         }
-        // s = (j − at_k)/span on the index axis: a piece up to s = `to`
-        // covers the grid points from the last piece's end to the first at
-        // or after `to`.
-        let (at, span) = (self.at[k], self.at[k + 1] - self.at[k]);
-        let mut from = a;
+        // s = (j − at)/span: a piece up to s = `to` covers the grid points
+        // from the last piece's end to the first at or after `to`.
+        let mut from = first;
         for (to, c0, c1) in self.pieces(wa, wb) {
             let b = if to < 1.0 { ceil(at + to * span).clamp(from, end) } else { end };
             if b > from {
-                sums.add(from, b, c0 + c1 * (from as f64 - at) / span, c1 / span, self.last);
+                sums.add(from, b, c0 + c1 * (from as f64 - at) * per_point, c1 * per_point, self.last);
             }
             from = b;
         }
@@ -208,6 +208,21 @@ impl PartitionCentroid {
             Implication::Product => wa / (wa + wb),
         }
     }
+}
+
+/// The grid points between two neighbouring peaks p and q: s = (j − at)/span
+/// on the grid's index axis, with at = (p − lo)/dx and span = (q − p)/dx;
+/// the first grid point at or after p and the first at or after q (0
+/// before lo, L + 1 past hi). Edges are found once, so neighbouring cells
+/// and pieces agree on which grid points are whose.
+#[derive(Clone, Copy, Debug)]
+struct Cell {
+    at: f64,
+    span: f64,
+    /// 1/span: how much s moves per grid point.
+    per_point: f64,
+    first: i64,
+    end: i64,
 }
 
 /// The smallest whole number at or above `v`: the libm call `f64::ceil`

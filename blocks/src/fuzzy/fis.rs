@@ -199,7 +199,15 @@ pub struct Fis {
     /// first `n_fired` entries.
     fired: Vec<(usize, f64)>,
     n_fired: usize,
+    /// Per output term (output o's from `term_offsets[o]`), the strength of
+    /// its conclusion this call: the strongest (max aggregation) or the sum
+    /// (sum) of the fired rules' concluding it — the one pass over the fired
+    /// rules that all outputs share. Each rule's conclusions as indices into
+    /// it: `conclusions[conclusion_ranges[r]]`.
     term_strength: Vec<f64>,
+    term_offsets: Vec<usize>,
+    conclusions: Vec<usize>,
+    conclusion_ranges: Vec<Range<usize>>,
     /// Zero between calls (each call clears the range it wrote).
     aggregate: Vec<f64>,
 }
@@ -243,7 +251,18 @@ impl Fis {
                 None => dense.push(r),
             }
         }
-        let most_terms = outputs.iter().map(|v| v.terms.len()).max().unwrap_or(0);
+        let term_offsets: Vec<usize> = std::iter::once(0)
+            .chain(outputs.iter().scan(0, |next, v| {
+                *next += v.terms.len();
+                Some(*next)
+            }))
+            .collect();
+        let (mut conclusions, mut conclusion_ranges) = (Vec::new(), Vec::with_capacity(rules.len()));
+        for rule in &rules {
+            let start = conclusions.len();
+            conclusions.extend(rule.consequents.iter().map(|&(o, t)| term_offsets[o] + t));
+            conclusion_ranges.push(start..conclusions.len());
+        }
         let closed_form = !sugeno && methods.defuzzification == Defuzzification::Centroid;
         let exact = outputs
             .iter()
@@ -256,7 +275,10 @@ impl Fis {
             membership: vec![0.0; n_memberships],
             fired: vec![(0, 0.0); rules.len()],
             n_fired: 0,
-            term_strength: vec![0.0; most_terms],
+            term_strength: vec![0.0; term_offsets[outputs.len()]],
+            term_offsets,
+            conclusions,
+            conclusion_ranges,
             aggregate: vec![0.0; m],
             offsets,
             sparse,
@@ -307,8 +329,37 @@ impl Fis {
             Some(grid) => grid.fire(&self.clipped, &mut self.fired),
             None => self.fire_by_memberships(),
         };
+        if !self.sugeno && self.by_term() {
+            self.gather_term_strengths();
+        }
         for (o, yo) in y.iter_mut().enumerate().take(self.outputs.len()) {
             *yo = if self.sugeno { self.sugeno_output(o) } else { self.mamdani_output(o) };
+        }
+    }
+
+    /// Whether the implied sets depend on the rules only through their
+    /// terms' strengths (all but sum aggregation of min implication; see
+    /// `mamdani_output`).
+    fn by_term(&self) -> bool {
+        !(self.methods.aggregation == Aggregation::Sum && self.methods.implication == Implication::Min)
+    }
+
+    /// `term_strength` from the fired rules (written with a plain
+    /// comparison: strengths are finite).
+    fn gather_term_strengths(&mut self) {
+        self.term_strength.iter_mut().for_each(|w| *w = 0.0);
+        let sum = self.methods.aggregation == Aggregation::Sum;
+        for &(r, s) in &self.fired[..self.n_fired] {
+            for &t in &self.conclusions[self.conclusion_ranges[r].clone()] {
+                let w = &mut self.term_strength[t];
+                *w = if sum {
+                    *w + s
+                } else if s > *w {
+                    s
+                } else {
+                    *w
+                };
+            }
         }
     }
 
@@ -379,8 +430,10 @@ impl Fis {
     /// the output's terms are a triangular partition, the centroid comes in
     /// closed form from the term strengths instead (see `centroid`).
     fn mamdani_output(&mut self, o: usize) -> f64 {
-        let Fis { fired, n_fired, rules, term_strength, aggregate, term_grids, supports, methods, exact, .. } = self;
+        let by_term = self.by_term();
+        let Fis { fired, n_fired, rules, aggregate, term_grids, supports, methods, exact, .. } = self;
         let (terms, supports, fired) = (&term_grids[o], &supports[o], &fired[..*n_fired]);
+        let strength = &self.term_strength[self.term_offsets[o]..self.term_offsets[o + 1]];
         let (imp, agg) = (methods.implication, methods.aggregation);
         let v = &self.outputs[o];
         let midpoint = (v.lo + v.hi) / 2.0;
@@ -392,15 +445,7 @@ impl Fis {
             (from, to) = (from.min(s.start), to.max(s.end));
             imply_and_aggregate(&mut aggregate[s.clone()], &terms[t][s], w, imp, agg);
         };
-        if !(agg == Aggregation::Sum && imp == Implication::Min) {
-            let strength = &mut term_strength[..terms.len()];
-            strength.iter_mut().for_each(|w| *w = 0.0);
-            for (t, s) in Self::conclusions(fired, rules, o) {
-                strength[t] = match agg {
-                    Aggregation::Max => strength[t].max(s),
-                    Aggregation::Sum => strength[t] + s,
-                };
-            }
+        if by_term {
             if let Some(exact) = &exact[o] {
                 return exact.centroid(strength).unwrap_or(midpoint);
             }

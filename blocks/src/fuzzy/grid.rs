@@ -75,6 +75,23 @@ impl RuleGrid {
             *l = p.locate(xi);
         }
         let mut n = 0;
+        let mut take = |cell: usize, strength: f64| {
+            for &r in &self.rules[self.cells[cell]..self.cells[cell + 1]] {
+                // Written always; the count moves only for nonzero strength.
+                fired[n] = (r, strength);
+                n += usize::from(strength > 0.0);
+            }
+        };
+        // Two inputs (the common controller): the four corners written out,
+        // in the general loop's order and with its arithmetic.
+        if let ([(k0, a0, b0), (k1, a1, b1)], [s0, s1]) = (&self.located[..], &self.strides[..]) {
+            let and = |u: f64, v: f64| if self.product { u * v } else { u.min(v) };
+            take(k0 * s0 + k1 * s1, and(*a0, *a1));
+            take((k0 + 1) * s0 + k1 * s1, and(*b0, *a1));
+            take(k0 * s0 + (k1 + 1) * s1, and(*a0, *b1));
+            take((k0 + 1) * s0 + (k1 + 1) * s1, and(*b0, *b1));
+            return n;
+        }
         for corner in 0..1usize << self.located.len() {
             let (mut cell, mut strength) = (0, if self.product { 1.0 } else { f64::INFINITY });
             for (i, &(k, at_k, at_next)) in self.located.iter().enumerate() {
@@ -83,11 +100,7 @@ impl RuleGrid {
                 cell += (k + up) * self.strides[i];
                 strength = if self.product { strength * mu } else { strength.min(mu) };
             }
-            for &r in &self.rules[self.cells[cell]..self.cells[cell + 1]] {
-                // Written always; the count moves only for nonzero strength.
-                fired[n] = (r, strength);
-                n += usize::from(strength > 0.0);
-            }
+            take(cell, strength);
         }
         n
     }
