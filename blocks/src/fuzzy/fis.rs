@@ -4,7 +4,7 @@
 //! once; `eval` writes into preallocated buffers and allocates nothing.
 
 use super::centroid::{PartitionCentroid, centroid_on_grid};
-use super::grid::RuleGrid;
+use super::grid::{RuleGrid, TermsByCell};
 use std::ops::Range;
 
 /// A membership function (parameter order as MATLAB's).
@@ -153,6 +153,14 @@ pub struct Methods {
     pub resolution: usize,
 }
 
+impl Methods {
+    /// Whether the implied sets depend on the rules only through their
+    /// terms' strengths: all but sum aggregation of min implication.
+    fn by_term(&self) -> bool {
+        !(self.aggregation == Aggregation::Sum && self.implication == Implication::Min)
+    }
+}
+
 impl Default for Methods {
     fn default() -> Self {
         Methods {
@@ -192,6 +200,9 @@ pub struct Fis {
     /// When the inputs are triangular partitions and the rules a table:
     /// the rules that can fire found by arithmetic (see `grid`).
     grid: Option<RuleGrid>,
+    /// With the table, when outputs need only their terms' strengths: each
+    /// cell's conclusions as indices into `term_strength`.
+    grid_terms: Option<TermsByCell>,
     // Work buffers.
     membership: Vec<f64>,
     clipped: Vec<f64>,
@@ -268,8 +279,15 @@ impl Fis {
             .iter()
             .map(|v| PartitionCentroid::new(v, m, methods.implication, methods.aggregation).filter(|_| closed_form))
             .collect();
+        let grid = RuleGrid::new(&inputs, &rules, methods.and);
+        let by_term = !sugeno && methods.by_term();
+        let grid_terms = grid
+            .as_ref()
+            .filter(|_| by_term)
+            .map(|g| g.terms_by_cell(|r| conclusions[conclusion_ranges[r].clone()].to_vec()));
         Fis {
-            grid: RuleGrid::new(&inputs, &rules, methods.and),
+            grid,
+            grid_terms,
             exact,
             clipped: vec![0.0; inputs.len()],
             membership: vec![0.0; n_memberships],
@@ -325,23 +343,23 @@ impl Fis {
         for (c, (v, &xi)) in self.clipped.iter_mut().zip(self.inputs.iter().zip(x)) {
             *c = xi.clamp(v.lo, v.hi);
         }
-        self.n_fired = match &mut self.grid {
-            Some(grid) => grid.fire(&self.clipped, &mut self.fired),
-            None => self.fire_by_memberships(),
-        };
-        if !self.sugeno && self.by_term() {
-            self.gather_term_strengths();
+        if let (Some(grid), Some(terms)) = (&mut self.grid, &self.grid_terms) {
+            self.term_strength.iter_mut().for_each(|w| *w = 0.0);
+            let sum = self.methods.aggregation == Aggregation::Sum;
+            grid.fire_into_terms(&self.clipped, terms, sum, &mut self.term_strength);
+            self.n_fired = 0;
+        } else {
+            self.n_fired = match &mut self.grid {
+                Some(grid) => grid.fire(&self.clipped, &mut self.fired),
+                None => self.fire_by_memberships(),
+            };
+            if !self.sugeno && self.methods.by_term() {
+                self.gather_term_strengths();
+            }
         }
         for (o, yo) in y.iter_mut().enumerate().take(self.outputs.len()) {
             *yo = if self.sugeno { self.sugeno_output(o) } else { self.mamdani_output(o) };
         }
-    }
-
-    /// Whether the implied sets depend on the rules only through their
-    /// terms' strengths (all but sum aggregation of min implication; see
-    /// `mamdani_output`).
-    fn by_term(&self) -> bool {
-        !(self.methods.aggregation == Aggregation::Sum && self.methods.implication == Implication::Min)
     }
 
     /// `term_strength` from the fired rules (written with a plain
@@ -430,7 +448,7 @@ impl Fis {
     /// the output's terms are a triangular partition, the centroid comes in
     /// closed form from the term strengths instead (see `centroid`).
     fn mamdani_output(&mut self, o: usize) -> f64 {
-        let by_term = self.by_term();
+        let by_term = self.methods.by_term();
         let Fis { fired, n_fired, rules, aggregate, term_grids, supports, methods, exact, .. } = self;
         let (terms, supports, fired) = (&term_grids[o], &supports[o], &fired[..*n_fired]);
         let strength = &self.term_strength[self.term_offsets[o]..self.term_offsets[o + 1]];

@@ -71,37 +71,89 @@ impl RuleGrid {
     /// (clipped to the universes already) to `fired` and returns how many
     /// have nonzero strength — those come first.
     pub fn fire(&mut self, x: &[f64], fired: &mut [(usize, f64)]) -> usize {
-        for ((l, p), &xi) in self.located.iter_mut().zip(&self.partitions).zip(x) {
-            *l = p.locate(xi);
-        }
         let mut n = 0;
-        let mut take = |cell: usize, strength: f64| {
-            for &r in &self.rules[self.cells[cell]..self.cells[cell + 1]] {
+        let (cells, rules) = (&self.cells, &self.rules);
+        Self::corners(&mut self.located, &self.partitions, &self.strides, self.product, x, |cell, strength| {
+            for &r in &rules[cells[cell]..cells[cell + 1]] {
                 // Written always; the count moves only for nonzero strength.
                 fired[n] = (r, strength);
                 n += usize::from(strength > 0.0);
             }
-        };
-        // Two inputs (the common controller): the four corners written out,
-        // in the general loop's order and with its arithmetic.
-        if let ([(k0, a0, b0), (k1, a1, b1)], [s0, s1]) = (&self.located[..], &self.strides[..]) {
-            let and = |u: f64, v: f64| if self.product { u * v } else { u.min(v) };
-            take(k0 * s0 + k1 * s1, and(*a0, *a1));
-            take((k0 + 1) * s0 + k1 * s1, and(*b0, *a1));
-            take(k0 * s0 + (k1 + 1) * s1, and(*a0, *b1));
-            take((k0 + 1) * s0 + (k1 + 1) * s1, and(*b0, *b1));
-            return n;
-        }
-        for corner in 0..1usize << self.located.len() {
-            let (mut cell, mut strength) = (0, if self.product { 1.0 } else { f64::INFINITY });
-            for (i, &(k, at_k, at_next)) in self.located.iter().enumerate() {
-                let up = corner >> i & 1;
-                let mu = if up == 1 { at_next } else { at_k };
-                cell += (k + up) * self.strides[i];
-                strength = if self.product { strength * mu } else { strength.min(mu) };
-            }
-            take(cell, strength);
-        }
+        });
         n
     }
+
+    /// What `fire` and then gathering the fired rules' conclusions by term
+    /// give, without the list of fired rules: each corner cell's strength
+    /// goes straight to the terms its rules conclude, `conclusions[c]` for
+    /// cell c (flat term indices, in rule order), strongest or summed.
+    /// Rules of zero strength change nothing (w ≥ 0: max(w, 0) = w + 0 = w).
+    pub fn fire_into_terms(&mut self, x: &[f64], conclusions: &TermsByCell, sum: bool, strength: &mut [f64]) {
+        Self::corners(&mut self.located, &self.partitions, &self.strides, self.product, x, |cell, s| {
+            for &t in &conclusions.terms[conclusions.cells[cell]..conclusions.cells[cell + 1]] {
+                let w = &mut strength[t];
+                *w = if sum {
+                    *w + s
+                } else if s > *w {
+                    s
+                } else {
+                    *w
+                };
+            }
+        });
+    }
+
+    /// The rules' conclusions as term indices, by cell (see `fire_into_terms`).
+    pub fn terms_by_cell(&self, conclusions_of: impl Fn(usize) -> Vec<usize>) -> TermsByCell {
+        let mut by = TermsByCell { cells: vec![0], terms: Vec::new() };
+        for c in 0..self.cells.len() - 1 {
+            for &r in &self.rules[self.cells[c]..self.cells[c + 1]] {
+                by.terms.extend(conclusions_of(r));
+            }
+            by.cells.push(by.terms.len());
+        }
+        by
+    }
+
+    /// Calls `visit(cell, strength)` for the 2ⁿ cells around `x`, in the
+    /// order of the corners' bits (input 0 the lowest).
+    fn corners(
+        located: &mut [(usize, f64, f64)],
+        partitions: &[Partition],
+        strides: &[usize],
+        product: bool,
+        x: &[f64],
+        mut visit: impl FnMut(usize, f64),
+    ) {
+        for ((l, p), &xi) in located.iter_mut().zip(partitions).zip(x) {
+            *l = p.locate(xi);
+        }
+        // Two inputs (the common controller): the four corners written out,
+        // in the general loop's order and with its arithmetic.
+        if let ([(k0, a0, b0), (k1, a1, b1)], [s0, s1]) = (&*located, strides) {
+            let and = |u: f64, v: f64| if product { u * v } else { u.min(v) };
+            visit(k0 * s0 + k1 * s1, and(*a0, *a1));
+            visit((k0 + 1) * s0 + k1 * s1, and(*b0, *a1));
+            visit(k0 * s0 + (k1 + 1) * s1, and(*a0, *b1));
+            visit((k0 + 1) * s0 + (k1 + 1) * s1, and(*b0, *b1));
+            return;
+        }
+        for corner in 0..1usize << located.len() {
+            let (mut cell, mut strength) = (0, if product { 1.0 } else { f64::INFINITY });
+            for (i, &(k, at_k, at_next)) in located.iter().enumerate() {
+                let up = corner >> i & 1;
+                let mu = if up == 1 { at_next } else { at_k };
+                cell += (k + up) * strides[i];
+                strength = if product { strength * mu } else { strength.min(mu) };
+            }
+            visit(cell, strength);
+        }
+    }
+}
+
+/// Per cell of a rule table, the term indices its rules conclude.
+#[derive(Clone, Debug)]
+pub struct TermsByCell {
+    cells: Vec<usize>,
+    terms: Vec<usize>,
 }
