@@ -106,8 +106,17 @@ impl StateSpace {
     /// same sums: Σ over one term is that term).
     #[inline]
     pub fn derivative_single_input(&self, x: &[f64], u: f64, dx: &mut [f64]) {
-        for (i, d) in dx.iter_mut().enumerate().take(self.n) {
-            *d = row_times(&self.a, self.n, i, x) + self.b[i] * u;
+        let (a, b) = (&self.a, &self.b);
+        match self.n {
+            1 => dx[..1].copy_from_slice(&affine_single_input::<1>(a, b, x, u)),
+            2 => dx[..2].copy_from_slice(&affine_single_input::<2>(a, b, x, u)),
+            3 => dx[..3].copy_from_slice(&affine_single_input::<3>(a, b, x, u)),
+            4 => dx[..4].copy_from_slice(&affine_single_input::<4>(a, b, x, u)),
+            n => {
+                for (i, d) in dx.iter_mut().enumerate().take(n) {
+                    *d = row_times(a, n, i, x) + b[i] * u;
+                }
+            }
         }
     }
 
@@ -133,6 +142,22 @@ impl StateSpace {
     pub fn output_state_only_scalar(&self, x: &[f64]) -> f64 {
         row_times(&self.c, self.n, 0, x)
     }
+}
+
+/// `M·x + g·u` for N states and one input (M row-major N×N), with N known
+/// to the compiler so the loops unroll: a transfer function's usual
+/// realisation. The general loops' sums, in the same order.
+#[inline]
+pub(crate) fn affine_single_input<const N: usize>(m: &[f64], g: &[f64], x: &[f64], u: f64) -> [f64; N] {
+    let now: [f64; N] = std::array::from_fn(|j| x[j]);
+    let (m, g) = (&m[..N * N], &g[..N]);
+    std::array::from_fn(|i| {
+        let mut v = 0.0;
+        for j in 0..N {
+            v += m[i * N + j] * now[j];
+        }
+        v + g[i] * u
+    })
 }
 
 /// Row `i` of a row-major matrix with `cols` columns times `v`, summed in
@@ -202,9 +227,15 @@ mod tests {
     /// block takes compute the general sums, to the bit.
     #[test]
     fn single_input_and_output_shortcuts_equal_the_general_sums() {
-        for (num, den) in
-            [(vec![1.639e4], vec![1.0, 154.8, 2.242e4]), (vec![2.0, -3.0, 0.5], vec![1.0, 0.3, -2.0, 7.0])]
-        {
+        // Orders 1–4 (the unrolled sizes) and 5 (the general loop).
+        let systems = [
+            (vec![4.0], vec![1.0, 2.5]),
+            (vec![1.639e4], vec![1.0, 154.8, 2.242e4]),
+            (vec![2.0, -3.0, 0.5], vec![1.0, 0.3, -2.0, 7.0]),
+            (vec![1.0, 0.0, -2.0, 0.5], vec![1.0, 4.0, 6.5, 4.0, 1.2]),
+            (vec![0.3, 1.0], vec![1.0, 1.0, 2.0, 3.0, 4.0, 5.0]),
+        ];
+        for (num, den) in systems {
             let ss = tf2ss(&num, &den).unwrap();
             for k in 0..50 {
                 let x: Vec<f64> = (0..ss.n).map(|j| ((k * 7 + j * 13) % 17) as f64 / 3.0 - 2.5).collect();

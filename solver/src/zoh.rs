@@ -17,6 +17,7 @@
 //! where 20 terms leave a truncation error below 1e-25.
 
 use crate::StateSpace;
+use crate::lti::affine_single_input;
 
 /// Steps whose lengths agree to this relative tolerance share Φ and Γ.
 /// Floating-point grid times jitter in the last bits (k/n − (k−1)/n is not
@@ -193,19 +194,10 @@ fn multiply(a: &[f64], b: &[f64], c: &mut [f64], k: usize) {
     }
 }
 
-/// `x ← Φ·x + γ·u` for N states and one input: the general loop's sums,
-/// in the same order, with N fixed.
-#[inline]
+/// `x ← Φ·x + γ·u` for N states and one input (see [`affine_single_input`]).
 fn step_single_input<const N: usize>(phi: &[f64], gamma: &[f64], x: &mut [f64], u: f64) {
-    let now: [f64; N] = std::array::from_fn(|j| x[j]);
-    let (phi, gamma) = (&phi[..N * N], &gamma[..N]);
-    for i in 0..N {
-        let mut v = 0.0;
-        for j in 0..N {
-            v += phi[i * N + j] * now[j];
-        }
-        x[i] = v + gamma[i] * u;
-    }
+    let next = affine_single_input::<N>(phi, gamma, x, u);
+    x[..N].copy_from_slice(&next);
 }
 
 #[cfg(test)]
