@@ -565,3 +565,34 @@ fn closed_form_centroid_is_used_where_it_applies() {
     let rebuilt = Fis::new(gauss.inputs, gauss.outputs, gauss.rules, gauss.methods, false);
     assert!(!rebuilt.has_exact_centroid(0));
 }
+
+/// The shortcuts take a variable for a triangular partition only when its
+/// peaks strictly increase and reach both ends of its universe: equal
+/// neighbouring peaks (both terms are 1 there, where a partition has one),
+/// or a universe reaching past the outer peaks (no term is nonzero there),
+/// and the input table and the closed-form centroid are off.
+#[test]
+fn partitions_must_increase_and_cover_their_universe() {
+    let chain = |name: &str, peaks: &[f64]| {
+        let n = peaks.len();
+        let terms = (0..n)
+            .map(|k| (format!("T{k}"), Mf::Tri(peaks[k.saturating_sub(1)], peaks[k], peaks[(k + 1).min(n - 1)])))
+            .collect();
+        Variable { name: name.into(), lo: -1.0, hi: 1.0, terms }
+    };
+    let system = |peaks: &[f64]| {
+        let rule = |t: usize| Rule {
+            antecedents: vec![(0, t, false)],
+            connective: Connective::And,
+            consequents: vec![(0, t)],
+        };
+        let rules = (0..peaks.len()).map(rule).collect();
+        Fis::new(vec![chain("x", peaks)], vec![chain("y", peaks)], rules, Methods::default(), false)
+    };
+    let fis = system(&[-1.0, 0.0, 1.0]);
+    assert!(fis.uses_rule_grid() && fis.has_exact_centroid(0));
+    for peaks in [[-1.0, 0.0, 0.0, 1.0], [-0.5, 0.0, 0.5, 1.0], [-1.0, -0.5, 0.0, 0.5]] {
+        let fis = system(&peaks);
+        assert!(!fis.uses_rule_grid() && !fis.has_exact_centroid(0), "{peaks:?}");
+    }
+}
