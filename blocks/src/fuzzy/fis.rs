@@ -343,8 +343,11 @@ impl Fis {
         for (c, (v, &xi)) in self.clipped.iter_mut().zip(self.inputs.iter().zip(x)) {
             *c = xi.clamp(v.lo, v.hi);
         }
-        if let (Some(grid), Some(terms)) = (&mut self.grid, &self.grid_terms) {
+        let by_term = !self.sugeno && self.methods.by_term();
+        if by_term {
             self.term_strength.iter_mut().for_each(|w| *w = 0.0);
+        }
+        if let (Some(grid), Some(terms)) = (&mut self.grid, &self.grid_terms) {
             let sum = self.methods.aggregation == Aggregation::Sum;
             grid.fire_into_terms(&self.clipped, terms, sum, &mut self.term_strength);
             self.n_fired = 0;
@@ -353,7 +356,7 @@ impl Fis {
                 Some(grid) => grid.fire(&self.clipped, &mut self.fired),
                 None => self.fire_by_memberships(),
             };
-            if !self.sugeno && self.methods.by_term() {
+            if by_term {
                 self.gather_term_strengths();
             }
         }
@@ -362,21 +365,12 @@ impl Fis {
         }
     }
 
-    /// `term_strength` from the fired rules (written with a plain
-    /// comparison: strengths are finite).
+    /// `term_strength` (zeroed) from the fired rules.
     fn gather_term_strengths(&mut self) {
-        self.term_strength.iter_mut().for_each(|w| *w = 0.0);
         let sum = self.methods.aggregation == Aggregation::Sum;
         for &(r, s) in &self.fired[..self.n_fired] {
             for &t in &self.conclusions[self.conclusion_ranges[r].clone()] {
-                let w = &mut self.term_strength[t];
-                *w = if sum {
-                    *w + s
-                } else if s > *w {
-                    s
-                } else {
-                    *w
-                };
+                conclude(&mut self.term_strength[t], s, sum);
             }
         }
     }
@@ -489,6 +483,19 @@ impl Fis {
         aggregate[touched].iter_mut().for_each(|a| *a = 0.0);
         y
     }
+}
+
+/// A term's strength `w` after a rule of strength `s` concludes it: the
+/// sum or the larger (a plain comparison: strengths are finite).
+#[inline]
+pub(super) fn conclude(w: &mut f64, s: f64, sum: bool) {
+    *w = if sum {
+        *w + s
+    } else if s > *w {
+        s
+    } else {
+        *w
+    };
 }
 
 /// The index range outside which `mu` is zero (empty when it is zero

@@ -10,7 +10,7 @@
 //! expressions as `Mf::eval`, so the fired strengths are the general
 //! path's to the bit.
 
-use super::fis::{AndMethod, Connective, Rule, Variable};
+use super::fis::{AndMethod, Connective, Rule, Variable, conclude};
 use super::partition::Partition;
 
 /// The rule table over the inputs' partitions.
@@ -91,14 +91,7 @@ impl RuleGrid {
     pub fn fire_into_terms(&mut self, x: &[f64], conclusions: &TermsByCell, sum: bool, strength: &mut [f64]) {
         Self::corners(&mut self.located, &self.partitions, &self.strides, self.product, x, |cell, s| {
             for &t in &conclusions.terms[conclusions.cells[cell]..conclusions.cells[cell + 1]] {
-                let w = &mut strength[t];
-                *w = if sum {
-                    *w + s
-                } else if s > *w {
-                    s
-                } else {
-                    *w
-                };
+                conclude(&mut strength[t], s, sum);
             }
         });
     }
