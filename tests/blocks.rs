@@ -84,6 +84,25 @@ fn scalar_sums_and_gains_run_in_place_as_their_blocks_would() {
 }
 
 #[test]
+fn demuxes_copy_in_place_in_major_and_minor_steps() {
+    // A demux runs as a copy on the signal buffer (`Kernel::Copy`), also
+    // in RK4's stages, where the integrator reads its second output: x' = 3t
+    // is integrated exactly (to rounding). Outputs of widths 2 and 1.
+    let yaml = graph(
+        "  k: { type: clock }\n  g: { type: gain, k: 3 }\n  one: { type: constant, value: 1 }\n\
+         \x20 m: { type: mux, widths: [1, 1, 1] }\n  d: { type: demux, widths: [2, 1] }\n\
+         \x20 x: { type: integrator }\n",
+        "k -> g, k -> m.u1, one -> m.u2, g -> m.u3, m -> d, d.y2 -> x",
+        "d.y1, d.y2, x",
+    );
+    let trace = run(&yaml);
+    assert_eq!(max_error(&trace, "d.y1[1]", |t| t), 0.0);
+    assert_eq!(max_error(&trace, "d.y1[2]", |_| 1.0), 0.0);
+    assert_eq!(max_error(&trace, "d.y2", |t| 3.0 * t), 0.0);
+    assert!(max_error(&trace, "x", |t| 1.5 * t * t) < 1e-12);
+}
+
+#[test]
 fn matrix_gain_and_routing() {
     let yaml = graph(
         "  a: { type: constant, value: 1 }\n  b: { type: constant, value: [2, 3] }\n\

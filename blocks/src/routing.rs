@@ -4,7 +4,7 @@
 
 use crate::{SAMPLE_TIME_INHERITED, param};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Kernel, Params, SampleTime, Width};
 
 pub const TYPES: &[BlockType] = &[
     BlockType {
@@ -169,6 +169,9 @@ struct Split(Vec<usize>);
 impl Block for Split {
     fn updates(&self) -> bool {
         false
+    }
+    fn kernel(&self) -> Option<Kernel> {
+        Some(Kernel::Copy)
     }
     fn output(&mut self, io: &mut Io) {
         let mut k = 0;

@@ -307,35 +307,41 @@ impl<'a> Io<'a> {
     }
 }
 
-/// A memoryless scalar computation that a block's `output` performs. The
-/// scheduler runs it in place of [`Block::output`] when the block's ports
-/// are all scalar, so the common sums and gains of a diagram skip the view
-/// and the dynamic call that cost several times their arithmetic.
+/// A memoryless computation that a block's `output` performs, simple
+/// enough for the scheduler to run in place of [`Block::output`] on the
+/// signal buffer, so the common sums, gains and demuxes of a diagram skip
+/// the view and the dynamic call that cost several times their arithmetic.
+/// `Scale` and `Affine2` run so when the block's ports are all scalar,
+/// `Copy` whatever the widths.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Kernel {
     /// y = k·u0
     Scale(f64),
     /// y = a·u0 + b·u1
     Affine2(f64, f64),
+    /// The one input's elements, in order, to the outputs end to end (a
+    /// demux: the outputs lie side by side in the signal buffer).
+    Copy,
 }
 
 impl Kernel {
     /// How many inputs it reads.
     pub fn arity(&self) -> usize {
         match self {
-            Kernel::Scale(_) => 1,
+            Kernel::Scale(_) | Kernel::Copy => 1,
             Kernel::Affine2(..) => 2,
         }
     }
 
-    /// y from the inputs (`u1` unused by `Scale`). Blocks with a kernel
-    /// compute their scalar output through this, so both paths agree to
-    /// the bit.
+    /// y from scalar inputs (`u1` unused by `Scale` and `Copy`). Blocks with
+    /// a scalar kernel compute their scalar output through this, so both
+    /// paths agree to the bit.
     #[inline]
     pub fn eval(&self, u0: f64, u1: f64) -> f64 {
         match *self {
             Kernel::Scale(k) => k * u0,
             Kernel::Affine2(a, b) => a * u0 + b * u1,
+            Kernel::Copy => u0,
         }
     }
 }
@@ -361,9 +367,10 @@ pub trait Block: Send + dyn_clone::DynClone {
     /// Computes the outputs from the inputs, `io.x` and discrete state.
     fn output(&mut self, io: &mut Io);
 
-    /// The memoryless scalar computation `output` performs, if it is one
-    /// (see [`Kernel`]); asked after `set_width`. A block that returns one
-    /// must have no state and compute exactly it for scalar ports.
+    /// The memoryless computation `output` performs, if it is one (see
+    /// [`Kernel`]); asked after `set_width`. A block that returns one must
+    /// have no state and compute exactly it (for scalar ports, when the
+    /// kernel is scalar).
     fn kernel(&self) -> Option<Kernel> {
         None
     }

@@ -5,34 +5,48 @@ use crate::block::Kernel;
 use crate::compile::Model;
 
 /// A block whose output the step loop computes in place: its
-/// [`Kernel`] and where its scalar inputs and output are in the signal
-/// buffer. Worth it for the small blocks (sums, gains) that make up much of
-/// a diagram: a call through a view costs several times their arithmetic.
+/// [`Kernel`] and where its inputs and output are in the signal buffer.
+/// Worth it for the small blocks (sums, gains, demuxes) that make up much
+/// of a diagram: a call through a view costs several times their arithmetic.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Inline {
     kernel: Kernel,
     u0: usize,
     u1: usize,
     y: usize,
+    /// Elements copied (`Kernel::Copy`).
+    width: usize,
 }
 
 impl Inline {
-    /// Block `i`'s kernel, when it has one and its ports are scalar.
+    /// Block `i`'s kernel, when it has one and its ports suit it: all
+    /// scalar for a scalar kernel; for `Copy` one input, as wide as the
+    /// outputs, which lie end to end.
     pub(super) fn of(model: &Model, i: usize) -> Option<Inline> {
         let kernel = model.blocks[i].kernel()?;
         let slot = &model.slots[i];
         let (ins, outs) = (&model.in_ports[slot.inputs.clone()], &model.out_ports[slot.outputs.clone()]);
-        let scalar = ins.iter().chain(outs).all(|p| p.width == 1);
-        (scalar && ins.len() == kernel.arity() && outs.len() == 1).then(|| Inline {
-            kernel,
-            u0: ins[0].offset,
-            u1: ins[ins.len() - 1].offset,
-            y: outs[0].offset,
-        })
+        let (first, last) = (ins.first()?, ins.last()?);
+        let y = outs.first()?.offset;
+        let width = outs.iter().map(|p| p.width).sum::<usize>();
+        let suits = match kernel {
+            Kernel::Copy => {
+                let end_to_end = outs.windows(2).all(|w| w[1].offset == w[0].offset + w[0].width);
+                ins.len() == 1 && first.width == width && end_to_end
+            }
+            _ => {
+                let scalar = ins.iter().chain(outs).all(|p| p.width == 1);
+                scalar && ins.len() == kernel.arity() && outs.len() == 1
+            }
+        };
+        suits.then_some(Inline { kernel, u0: first.offset, u1: last.offset, y, width })
     }
 
     #[inline]
     pub(super) fn run(&self, signals: &mut [f64]) {
-        signals[self.y] = self.kernel.eval(signals[self.u0], signals[self.u1]);
+        match self.kernel {
+            Kernel::Copy => signals.copy_within(self.u0..self.u0 + self.width, self.y),
+            kernel => signals[self.y] = kernel.eval(signals[self.u0], signals[self.u1]),
+        }
     }
 }
