@@ -186,16 +186,20 @@ impl PartitionCentroid {
     /// to s*, then s from s* to w_b, then w_b.
     fn pieces(&self, wa: f64, wb: f64) -> [(f64, f64, f64); 4] {
         const EMPTY: (f64, f64, f64) = (1.0, 0.0, 0.0);
-        let crossing = self.crossing(wa, wb);
         match (self.implication, self.aggregation) {
             // (Min with sum aggregation never gets here: see `new`.)
-            (Implication::Min, _) => [
-                (if 1.0 - wa < crossing { 1.0 - wa } else { crossing }, wa, 0.0),
-                (crossing, 1.0, -1.0),
-                (if wb > crossing { wb } else { crossing }, 0.0, 1.0),
-                (1.0, wb, 0.0),
-            ],
-            (Implication::Product, Aggregation::Max) => [(crossing, wa, -wa), (1.0, 0.0, wb), EMPTY, EMPTY],
+            (Implication::Min, _) => {
+                let crossing = self.crossing(wa, wb);
+                [
+                    (if 1.0 - wa < crossing { 1.0 - wa } else { crossing }, wa, 0.0),
+                    (crossing, 1.0, -1.0),
+                    (if wb > crossing { wb } else { crossing }, 0.0, 1.0),
+                    (1.0, wb, 0.0),
+                ]
+            }
+            (Implication::Product, Aggregation::Max) => {
+                [(self.crossing(wa, wb), wa, -wa), (1.0, 0.0, wb), EMPTY, EMPTY]
+            }
             (Implication::Product, Aggregation::Sum) => [(1.0, wa, wb - wa), EMPTY, EMPTY, EMPTY],
         }
     }
