@@ -413,17 +413,17 @@ impl Fis {
         }
     }
 
-    /// The (term, strength) conclusions of the fired rules on output `o`.
-    fn conclusions(fired: &[(usize, f64)], rules: &[Rule], o: usize) -> impl Iterator<Item = (usize, f64)> {
-        fired
-            .iter()
-            .flat_map(move |&(r, s)| rules[r].consequents.iter().filter(move |c| c.0 == o).map(move |&(_, t)| (t, s)))
+    /// The (term, strength) conclusions of the fired rules on output `o`
+    /// (terms numbered within the output).
+    fn conclusions(&self, o: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        let Fis { fired, n_fired, conclusions, conclusion_ranges, term_offsets, .. } = self;
+        concluding(&fired[..*n_fired], conclusions, conclusion_ranges, term_offsets[o]..term_offsets[o + 1])
     }
 
     /// Weighted average of the consequents' constants.
     fn sugeno_output(&self, o: usize) -> f64 {
         let (mut num, mut den) = (0.0, 0.0);
-        for (term, s) in Self::conclusions(&self.fired[..self.n_fired], &self.rules, o) {
+        for (term, s) in self.conclusions(o) {
             let z = match self.outputs[o].terms[term].1 {
                 Mf::Const(z) => z,
                 _ => 0.0,
@@ -443,11 +443,27 @@ impl Fis {
     /// closed form from the term strengths instead (see `centroid`).
     fn mamdani_output(&mut self, o: usize) -> f64 {
         let by_term = self.methods.by_term();
-        let Fis { fired, n_fired, rules, aggregate, term_grids, supports, methods, exact, .. } = self;
+        let Fis {
+            fired,
+            n_fired,
+            conclusions,
+            conclusion_ranges,
+            term_offsets,
+            term_strength,
+            aggregate,
+            term_grids,
+            supports,
+            methods,
+            exact,
+            outputs,
+            grids,
+            ..
+        } = self;
         let (terms, supports, fired) = (&term_grids[o], &supports[o], &fired[..*n_fired]);
-        let strength = &self.term_strength[self.term_offsets[o]..self.term_offsets[o + 1]];
+        let output_terms = term_offsets[o]..term_offsets[o + 1];
+        let strength = &term_strength[output_terms.clone()];
         let (imp, agg) = (methods.implication, methods.aggregation);
-        let v = &self.outputs[o];
+        let v = &outputs[o];
         let midpoint = (v.lo + v.hi) / 2.0;
         // The implied sets are zero outside their term's support: only the
         // union of the firing terms' supports is written and read.
@@ -467,7 +483,7 @@ impl Fis {
                 }
             }
         } else {
-            for (t, s) in Self::conclusions(fired, rules, o) {
+            for (t, s) in concluding(fired, conclusions, conclusion_ranges, output_terms) {
                 apply(t, s);
             }
         }
@@ -478,11 +494,27 @@ impl Fis {
         let y = if methods.defuzzification == Defuzzification::Centroid {
             centroid_on_grid(aggregate, touched.clone(), v.lo, v.hi).unwrap_or(midpoint)
         } else {
-            defuzzify(&self.grids[o], aggregate, methods.defuzzification).unwrap_or(midpoint)
+            defuzzify(&grids[o], aggregate, methods.defuzzification).unwrap_or(midpoint)
         };
         aggregate[touched].iter_mut().for_each(|a| *a = 0.0);
         y
     }
+}
+
+/// The (term within the output, strength) conclusions of the `fired`
+/// rules on the output whose terms are `terms` in the flat numbering of
+/// `conclusions` (rule r's are `conclusions[ranges[r]]`).
+fn concluding<'a>(
+    fired: &'a [(usize, f64)],
+    conclusions: &'a [usize],
+    ranges: &'a [Range<usize>],
+    terms: Range<usize>,
+) -> impl Iterator<Item = (usize, f64)> + 'a {
+    let (first, end) = (terms.start, terms.end);
+    fired.iter().flat_map(move |&(r, s)| {
+        let of_rule = conclusions[ranges[r].clone()].iter();
+        of_rule.filter(move |&&t| first <= t && t < end).map(move |&t| (t - first, s))
+    })
 }
 
 /// A term's strength `w` after a rule of strength `s` concludes it: the

@@ -59,10 +59,11 @@ pub(super) fn port_index(node: &Node, ep: &Endpoint, input: bool) -> Result<usiz
         true => inputs.iter().position(|q| q.name == p),
         false => outputs.iter().position(|q| q.name == p),
     };
+    let ports = if input { inputs.len() } else { outputs.len() };
     match &ep.port {
         _ if node.is_virtual => Ok(0),
         Some(p) => found(p).ok_or_else(|| port_error(node, ep, input)),
-        None if (if input { inputs.len() } else { outputs.len() }) == 1 => Ok(0),
+        None if ports == 1 => Ok(0),
         None => Err(port_error(node, ep, input)),
     }
 }

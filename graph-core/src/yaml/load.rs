@@ -186,7 +186,7 @@ impl Loader {
                 let pos = self.pos(span);
                 self.count(1, &pos)?;
                 if self.wants_key() {
-                    if style == ScalarStyle::Plain && matches!(&*value, "" | "~" | "null" | "Null" | "NULL") {
+                    if style == ScalarStyle::Plain && scalar::is_null(&value) {
                         return Err(Diagnostic::at(&pos, "a mapping key is missing (empty, `~` or `null`)")
                             .with_hint("write a name before the `:`"));
                     }

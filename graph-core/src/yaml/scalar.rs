@@ -55,8 +55,13 @@ fn mismatch(tag: &str, text: &str, what: &str) -> String {
     format!("`{tag}` asks for {what}, and `{text}` is not one")
 }
 
+/// Whether a plain scalar's text is null.
+pub fn is_null(text: &str) -> bool {
+    matches!(text, "" | "~" | "null" | "Null" | "NULL")
+}
+
 fn plain_scalar(text: &str) -> Kind {
-    if matches!(text, "" | "~" | "null" | "Null" | "NULL") {
+    if is_null(text) {
         return Kind::Null;
     }
     if let Some(b) = boolean(text) {
