@@ -118,12 +118,18 @@ impl Zoh {
     }
 
     /// The cache entry for `dt`, computed if neither entry has it.
+    /// Inlined (the step loop asks every step); a miss is the cold path.
+    #[inline]
     fn transition(&mut self, dt: f64) -> usize {
-        for (slot, c) in self.cache.iter().enumerate() {
-            if (c.dt - dt).abs() <= SAME_STEP * dt {
-                return slot;
-            }
+        match self.cache.iter().position(|c| (c.dt - dt).abs() <= SAME_STEP * dt) {
+            Some(slot) => slot,
+            None => self.replace_oldest(dt),
         }
+    }
+
+    /// Computes Φ and Γ for `dt` into the older cache entry.
+    #[cold]
+    fn replace_oldest(&mut self, dt: f64) -> usize {
         let slot = self.oldest;
         self.oldest = 1 - slot;
         self.computed += 1;

@@ -1,8 +1,27 @@
-//! Blocks whose output the step loop computes in place, from the
-//! [`Kernel`] they name, instead of calling them through a view.
+//! The sweeps' precomputed visits: which block, when it is due, and, for
+//! blocks whose output the step loop computes in place from the [`Kernel`]
+//! they name, that kernel (no call through a view).
 
 use crate::block::Kernel;
-use crate::compile::Model;
+use crate::compile::{Model, Rate};
+
+/// One block's turn in a sweep, laid out once so the step loop reads a
+/// list front to back instead of looking the block up in three tables.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Visit {
+    pub(super) block: usize,
+    pub(super) rate: Rate,
+    /// Run in place of the block's `output`.
+    pub(super) kernel: Option<Inline>,
+}
+
+impl Visit {
+    /// Visits of `blocks`, in their order.
+    pub(super) fn list(model: &Model, blocks: impl IntoIterator<Item = usize>) -> Vec<Visit> {
+        let visit = |block| Visit { block, rate: model.slots[block].rate, kernel: Inline::of(model, block) };
+        blocks.into_iter().map(visit).collect()
+    }
+}
 
 /// A block whose output the step loop computes in place: its
 /// [`Kernel`] and where its inputs and output are in the signal buffer.

@@ -1,7 +1,7 @@
 //! The system the ODE solver integrates between major steps: continuous
 //! outputs recomputed at each stage, discrete outputs held.
 
-use super::inline::Inline;
+use super::inline::Visit;
 use super::io_for;
 use crate::compile::Model;
 use ctlgraph_solver::OdeSystem;
@@ -12,10 +12,8 @@ use ctlgraph_solver::OdeSystem;
 pub(super) struct Minor<'a> {
     pub(super) model: &'a mut Model,
     pub(super) signals: &'a mut [f64],
-    pub(super) continuous: &'a [usize],
+    pub(super) continuous: &'a [Visit],
     pub(super) stateful: &'a [usize],
-    /// Per block: its kernel, run in place of `output`.
-    pub(super) inline: &'a [Option<Inline>],
     pub(super) t_end: f64,
 }
 
@@ -24,14 +22,14 @@ impl Minor<'_> {
     pub(super) fn outputs(&mut self, t: f64, x: &[f64]) {
         let m = &mut *self.model;
         let left = t >= self.t_end;
-        for &i in self.continuous {
-            if let Some(kernel) = &self.inline[i] {
+        for v in self.continuous {
+            if let Some(kernel) = &v.kernel {
                 kernel.run(self.signals);
                 continue;
             }
-            let meta = &m.slots[i];
+            let meta = &m.slots[v.block];
             let mut io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
-            m.blocks[i].output(&mut io);
+            m.blocks[v.block].output(&mut io);
         }
     }
 

@@ -23,7 +23,7 @@ use crate::compile::{Between, Model, Rate, Slot};
 use ctlgraph_solver::{Integrator, Method, SolverError, Stats, Zoh};
 pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
-use inline::Inline;
+use inline::Visit;
 use minor::Minor;
 
 /// The times k·h of a grid with step h. When h is the reciprocal of a
@@ -109,13 +109,13 @@ pub struct Simulator {
     /// LTI blocks stepped exactly (see [`crate::compile::Between`]).
     held: Vec<Held>,
     /// Blocks with an `update` to run (execution order).
-    updating: Vec<usize>,
+    updating: Vec<Visit>,
     /// The blocks in execution order; those a major step without an event
     /// runs (or runs at its clock's hits): neither constant nor event-only.
-    every: Vec<usize>,
-    regular: Vec<usize>,
-    /// Per block: its kernel, run in place of `output` (see [`Inline`]).
-    inline: Vec<Option<Inline>>,
+    every: Vec<Visit>,
+    regular: Vec<Visit>,
+    /// The blocks whose outputs minor steps recompute (`Between::minor`).
+    minor: Vec<Visit>,
     /// Whether this major step is at a block event (see `Between::event_only`).
     at_event: bool,
     /// A host set an input since the last outputs (see [`Simulator::set_input`]).
@@ -167,6 +167,7 @@ impl Simulator {
                 Some(Held { block, u: vec![0.0; ss.m], zoh: Zoh::new(ss) })
             })
             .collect();
+        let n = model.blocks.len();
         let mut sim = Simulator {
             signals: vec![0.0; model.signal_len],
             x: vec![0.0; model.n_states],
@@ -184,12 +185,13 @@ impl Simulator {
             watch,
             held,
             between: model.between.clone(),
-            updating: (0..model.blocks.len()).filter(|&i| model.blocks[i].updates()).collect(),
-            every: (0..model.blocks.len()).collect(),
-            regular: (0..model.blocks.len())
-                .filter(|&i| model.slots[i].rate != Rate::Constant && !model.between.event_only[i])
-                .collect(),
-            inline: (0..model.blocks.len()).map(|i| Inline::of(&model, i)).collect(),
+            updating: Visit::list(&model, (0..n).filter(|&i| model.blocks[i].updates())),
+            every: Visit::list(&model, 0..n),
+            regular: Visit::list(
+                &model,
+                (0..n).filter(|&i| model.slots[i].rate != Rate::Constant && !model.between.event_only[i]),
+            ),
+            minor: Visit::list(&model, model.between.minor.iter().copied()),
             at_event: true,
             inputs_changed: false,
             pause: f64::INFINITY,
@@ -301,15 +303,15 @@ impl Simulator {
         let m = &mut self.model;
         let all = self.first || self.at_event || self.inputs_changed;
         let order = if all { &self.every } else { &self.regular };
-        for &i in order {
-            let slot = &m.slots[i];
-            if due(slot.rate, &self.clocks, self.first) {
-                if let Some(kernel) = &self.inline[i] {
+        for v in order {
+            if due(v.rate, &self.clocks, self.first) {
+                if let Some(kernel) = &v.kernel {
                     kernel.run(&mut self.signals);
                     continue;
                 }
+                let slot = &m.slots[v.block];
                 let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
-                m.blocks[i].output(&mut io);
+                m.blocks[v.block].output(&mut io);
             }
         }
     }
@@ -318,11 +320,11 @@ impl Simulator {
     /// and are due now: continuous ones always, discrete ones at hits.
     fn update_sweep(&mut self) {
         let m = &mut self.model;
-        for &i in &self.updating {
-            let slot = &m.slots[i];
-            if due(slot.rate, &self.clocks, false) {
+        for v in &self.updating {
+            if due(v.rate, &self.clocks, false) {
+                let slot = &m.slots[v.block];
                 let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
-                m.blocks[i].update(&mut io);
+                m.blocks[v.block].update(&mut io);
             }
         }
     }
@@ -409,9 +411,8 @@ impl Simulator {
         let mut sys = Minor {
             model: &mut self.model,
             signals: &mut self.signals,
-            continuous: &self.between.minor,
+            continuous: &self.minor,
             stateful: &self.between.integrated,
-            inline: &self.inline,
             t_end: target,
         };
         let x = &mut self.x[..self.between.n_integrated];
