@@ -443,14 +443,22 @@ impl Integrator {
         self.eval(sys, 2, t + 0.5 * h, true, x);
         self.stage(x, h, &[(2, 1.0)]);
         self.eval(sys, 3, t + h, true, x);
-        let k = &self.k;
-        for i in 0..x.len() {
-            x[i] += h / 6.0 * (k[0][i] + 2.0 * k[1][i] + 2.0 * k[2][i] + k[3][i]);
+        let n = x.len();
+        let (k0, k1, k2, k3) = (&self.k[0][..n], &self.k[1][..n], &self.k[2][..n], &self.k[3][..n]);
+        for i in 0..n {
+            x[i] += h / 6.0 * (k0[i] + 2.0 * k1[i] + 2.0 * k2[i] + k3[i]);
         }
     }
 
     /// `tmp = x + h · Σ a_j k_j`.
     fn stage(&mut self, x: &[f64], h: f64, terms: &[(usize, f64)]) {
+        if let [(j, a)] = *terms {
+            // One term (Heun, RK4): zipped, no bounds checks; 0 + a·k as the loop below adds it.
+            for ((t, &xi), &kj) in self.tmp.iter_mut().zip(x).zip(&self.k[j]) {
+                *t = xi + h * (0.0 + a * kj);
+            }
+            return;
+        }
         for i in 0..x.len() {
             let mut s = 0.0;
             for &(j, a) in terms {
