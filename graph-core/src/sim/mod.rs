@@ -25,6 +25,7 @@ pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
 use inline::Visit;
 use minor::Minor;
+use std::ops::Range;
 
 /// The times k·h of a grid with step h. When h is the reciprocal of a
 /// whole number n (0.01, 1e-4, 0.5), k/n is used: division is correctly
@@ -126,12 +127,14 @@ pub struct Simulator {
     id: u64,
 }
 
-/// A held LTI block: its exact transitions and its input at the last major step.
+/// A held LTI block: its exact transitions, its input at the last major
+/// step, and where that input and its states are.
 #[derive(Clone)]
 struct Held {
-    block: usize,
     zoh: Zoh,
     u: Vec<f64>,
+    input: Range<usize>,
+    states: Range<usize>,
 }
 
 impl Simulator {
@@ -164,7 +167,10 @@ impl Simulator {
             .iter()
             .filter_map(|&block| {
                 let ss = model.blocks[block].lti()?.clone();
-                Some(Held { block, u: vec![0.0; ss.m], zoh: Zoh::new(ss) })
+                let (slot, u) = (&model.slots[block], vec![0.0; ss.m]);
+                let port = model.in_ports[slot.inputs.start];
+                let input = port.offset..port.offset + port.width;
+                Some(Held { zoh: Zoh::new(ss), u, input, states: slot.states.clone() })
             })
             .collect();
         let n = model.blocks.len();
@@ -401,8 +407,7 @@ impl Simulator {
     pub fn advance(&mut self) -> Result<(), SimError> {
         self.update_sweep();
         for h in &mut self.held {
-            let port = self.model.in_ports[self.model.slots[h.block].inputs.start];
-            for (u, &s) in h.u.iter_mut().zip(&self.signals[port.offset..port.offset + port.width]) {
+            for (u, &s) in h.u.iter_mut().zip(&self.signals[h.input.clone()]) {
                 *u = s;
             }
         }
@@ -452,7 +457,7 @@ impl Simulator {
         self.t = if (target - t_new).abs() <= self.tol { target } else { t_new };
         for h in &mut self.held {
             if self.t > t0 {
-                h.zoh.step(self.t - t0, &mut self.x[self.model.slots[h.block].states.clone()], &h.u);
+                h.zoh.step(self.t - t0, &mut self.x[h.states.clone()], &h.u);
             }
         }
         if self.grid_step > 0.0 {
