@@ -13,8 +13,9 @@
 //!
 //!   centroid = lo + dx·(S1 + μ_0/6 − μ_L·(L/2 + 1/6)) / (S0 − (μ_0 + μ_L)/2)
 
-use super::fis::{Aggregation, Implication, Variable};
+use super::fis::{Aggregation, Implication};
 use super::partition::Partition;
+use super::terms::Variable;
 use std::ops::Range;
 
 /// The centroid from the samples of μ in `range` of the grid (μ is zero

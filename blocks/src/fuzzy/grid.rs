@@ -10,8 +10,9 @@
 //! expressions as `Mf::eval`, so the fired strengths are the general
 //! path's to the bit.
 
-use super::fis::{AndMethod, Connective, Rule, Variable, conclude};
+use super::fis::{AndMethod, Connective, Rule, conclude};
 use super::partition::Partition;
+use super::terms::Variable;
 
 /// The rule table over the inputs' partitions.
 #[derive(Clone, Debug)]

@@ -6,6 +6,7 @@ mod centroid;
 pub mod fis;
 mod grid;
 mod partition;
+mod terms;
 
 use crate::{SAMPLE_TIME_INHERITED, param};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};

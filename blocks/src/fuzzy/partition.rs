@@ -4,7 +4,7 @@
 //! are is arithmetic — what the rule table (`grid`) and the exact centroid
 //! (`centroid`) build on.
 
-use super::fis::{Mf, Variable};
+use super::terms::{Mf, Variable};
 
 /// A variable's partition: its peaks, strictly increasing.
 #[derive(Clone, Debug)]
