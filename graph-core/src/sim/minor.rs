@@ -1,8 +1,8 @@
 //! The system the ODE solver integrates between major steps: continuous
 //! outputs recomputed at each stage, discrete outputs held.
 
-use super::inline::Visit;
 use super::io_for;
+use super::visit::Visit;
 use crate::compile::Model;
 use ctlgraph_solver::OdeSystem;
 

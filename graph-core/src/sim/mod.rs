@@ -13,8 +13,8 @@
 mod error;
 mod events;
 mod host;
-mod inline;
 mod minor;
+mod visit;
 pub use error::SimError;
 pub use host::Snapshot;
 
@@ -23,9 +23,9 @@ use crate::compile::{Between, Model, Rate, Slot};
 use ctlgraph_solver::{Integrator, Method, SolverError, Stats, Zoh};
 pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
-use inline::Visit;
 use minor::Minor;
 use std::ops::Range;
+use visit::Visit;
 
 /// The times k·h of a grid with step h. When h is the reciprocal of a
 /// whole number n (0.01, 1e-4, 0.5), k/n is used: division is correctly
