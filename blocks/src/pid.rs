@@ -127,13 +127,17 @@ impl Block for ContinuousPid {
             self.law.anti_windup == AntiWindup::Clamping && self.law.integrand(ki_e, v, u) == 0.0 && ki_e != 0.0;
     }
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
-        let (v, u, ki_e) = self.eval(io);
+        let e = io.u(0);
         dx[0] = match self.law.anti_windup {
             AntiWindup::Clamping if self.holding => 0.0,
-            AntiWindup::Clamping => ki_e,
-            _ => self.law.integrand(ki_e, v, u),
+            // Clamping was decided at the major step: ki·e, no output needed.
+            AntiWindup::Clamping => self.law.gains(io)[1] * e,
+            _ => {
+                let (v, u, ki_e) = self.eval(io);
+                self.law.integrand(ki_e, v, u)
+            }
         };
-        dx[1] = self.law.n * (io.u(0) - io.x[1]);
+        dx[1] = self.law.n * (e - io.x[1]);
     }
 }
 
