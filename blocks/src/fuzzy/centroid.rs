@@ -58,10 +58,11 @@ struct Sums {
 }
 
 impl Sums {
-    /// Adds μ_j = μ_a + δ·(j − a) for j = a … b − 1 (a < b), and notes the
-    /// end samples when the run reaches them (L = `last`).
-    fn add(&mut self, a: i64, b: i64, at_a: f64, per_point: f64, last: i64) {
-        let n = (b - a) as f64;
+    /// Adds μ_j = μ_a + δ·(j − a) for j = a … b − 1 (a < b, whole
+    /// numbers), and notes the end samples when the run reaches them (L =
+    /// `last`).
+    fn add(&mut self, a: f64, b: f64, at_a: f64, per_point: f64, last: f64) {
+        let n = b - a;
         // Σ i and Σ i² over i = 0 … n − 1: exact (whole numbers below 2⁵³,
         // divisions without remainder) up to n ≈ 200 000, beyond the
         // block's 100 000 points; past that, rounded to 1e-16.
@@ -69,11 +70,11 @@ impl Sums {
         let t2 = t1 * (2.0 * n - 1.0) / 3.0;
         let sum = n * at_a + per_point * t1;
         self.s0 += sum;
-        self.s1 += a as f64 * sum + at_a * t1 + per_point * t2;
-        if a == 0 {
+        self.s1 += a * sum + at_a * t1 + per_point * t2;
+        if a == 0.0 {
             self.first = at_a;
         }
-        if b == last + 1 {
+        if b == last + 1.0 {
             self.last = at_a + per_point * (n - 1.0);
         }
     }
@@ -107,7 +108,7 @@ pub(super) struct PartitionCentroid {
     /// Per pair of neighbouring peaks, the cell between them.
     cells: Vec<Cell>,
     /// Index L of the last grid point.
-    last: i64,
+    last: f64,
     lo: f64,
     hi: f64,
     implication: Implication,
@@ -122,14 +123,14 @@ impl PartitionCentroid {
             return None;
         }
         let peaks = Partition::of(v)?.peaks;
-        let last = points as i64 - 1;
-        let step = (v.hi - v.lo) / last as f64;
+        let last = (points - 1) as f64;
+        let step = (v.hi - v.lo) / last;
         let at = |p: f64| (p - v.lo) / step;
         let first = |p: f64| {
             if p <= v.lo {
-                0
+                0.0
             } else if p >= v.hi {
-                last + 1
+                last + 1.0
             } else {
                 ceil(at(p)).min(last)
             }
@@ -156,7 +157,7 @@ impl PartitionCentroid {
                 self.add_cell(cell, w[0], w[1], &mut sums);
             }
         }
-        sums.centroid(self.lo, self.hi, self.last as f64)
+        sums.centroid(self.lo, self.hi, self.last)
     }
 
     /// Adds the grid points of `cell`, where its falling and rising terms
@@ -170,9 +171,9 @@ impl PartitionCentroid {
         // from the last piece's end to the first at or after `to`.
         let mut from = first;
         for (to, c0, c1) in self.pieces(wa, wb) {
-            let b = if to < 1.0 { ceil(at + to * span).max(from).min(end) } else { end };
+            let b = if to < 1.0 { ceil(at + to * span).clamp(from, end) } else { end };
             if b > from {
-                sums.add(from, b, c0 + c1 * (from as f64 - at) * per_point, c1 * per_point, self.last);
+                sums.add(from, b, c0 + c1 * (from - at) * per_point, c1 * per_point, self.last);
             }
             from = b;
         }
@@ -229,15 +230,37 @@ struct Cell {
     span: f64,
     /// 1/span: how much s moves per grid point.
     per_point: f64,
-    first: i64,
-    end: i64,
+    first: f64,
+    end: f64,
 }
 
-/// The smallest whole number at or above `v`: the libm call `f64::ceil`
-/// compiles to on baseline x86-64 costs more than the rest of a piece.
-/// Indices are i64 here because i64 ↔ f64 are single instructions there,
-/// where usize ↔ f64 are not.
-fn ceil(v: f64) -> i64 {
-    let whole = v as i64; // truncates towards zero
-    if (whole as f64) < v { whole + 1 } else { whole }
+/// The smallest whole number at or above `v` (|v| < 2⁵¹: a grid index),
+/// in f64 arithmetic: adding and taking away 1.5·2⁵² leaves the nearest
+/// whole number (there the doubles are one apart), one more if that is
+/// below `v`. The libm call `f64::ceil` compiles to on baseline x86-64 (no
+/// SSE4.1) costs more than the rest of a piece, and a conversion to an
+/// integer and back is several instructions (Rust's `as` saturates); so
+/// the grid indices here are whole numbers held in f64.
+fn ceil(v: f64) -> f64 {
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    let nearest = (v + ROUND) - ROUND;
+    if nearest < v { nearest + 1.0 } else { nearest }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ceil;
+
+    /// The f64 ceiling agrees with libm's on whole numbers, just either
+    /// side of them, negative grid positions and the largest grids.
+    #[test]
+    fn ceil_in_f64_arithmetic_is_the_ceiling() {
+        let mut cases = vec![0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 1e-300, -1e-300, 200_000.0, 2f64.powi(50) - 0.5];
+        for k in [-3.0f64, 0.0, 1.0, 7.0, 100.0, 100_000.0] {
+            cases.extend([k, k.next_up(), k.next_down(), k + 0.25, k - 0.75]);
+        }
+        for v in cases {
+            assert_eq!(ceil(v), v.ceil(), "ceil({v:e})");
+        }
+    }
 }
