@@ -234,10 +234,11 @@ struct Cell {
     end: f64,
 }
 
-/// The smallest whole number at or above `v` (|v| < 2⁵¹: a grid index),
-/// in f64 arithmetic: adding and taking away 1.5·2⁵² leaves the nearest
-/// whole number (there the doubles are one apart), one more if that is
-/// below `v`. The libm call `f64::ceil` compiles to on baseline x86-64 (no
+/// The smallest whole number at or above `v`, in f64 arithmetic: adding
+/// and taking away 1.5·2⁵² leaves the nearest whole number (there the
+/// doubles are one apart), one more if that is below `v`. Exact for
+/// |v| < 2⁵¹; the callers clamp the result to the grid's indices (at most
+/// 100 001), so a position far outside them lands on the same index. The libm call `f64::ceil` compiles to on baseline x86-64 (no
 /// SSE4.1) costs more than the rest of a piece, and a conversion to an
 /// integer and back is several instructions (Rust's `as` saturates); so
 /// the grid indices here are whole numbers held in f64.
