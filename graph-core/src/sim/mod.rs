@@ -19,7 +19,7 @@ pub use error::SimError;
 pub use host::Snapshot;
 
 use crate::block::{Io, Port};
-use crate::compile::{Between, Model, Rate, Slot};
+use crate::compile::{Model, Rate, Slot};
 use ctlgraph_solver::{Integrator, Method, SolverError, Stats, Zoh};
 pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
@@ -105,8 +105,10 @@ pub struct Simulator {
     stalled: u32,
     /// Zero-crossing functions and their detection.
     watch: Watch,
-    /// What minor steps evaluate and integrate (the model's plan).
-    between: Between,
+    /// The blocks whose states the solver integrates, and how many states
+    /// that is (from the model's plan, [`crate::compile::Between`]).
+    integrated: Vec<usize>,
+    n_integrated: usize,
     /// LTI blocks stepped exactly (see [`crate::compile::Between`]).
     held: Vec<Held>,
     /// Blocks with an `update` to run (execution order).
@@ -190,7 +192,8 @@ impl Simulator {
             stalled: 0,
             watch,
             held,
-            between: model.between.clone(),
+            integrated: model.between.integrated.clone(),
+            n_integrated: model.between.n_integrated,
             updating: Visit::list(&model, (0..n).filter(|&i| model.blocks[i].updates())),
             every: Visit::list(&model, 0..n),
             regular: Visit::list(
@@ -417,10 +420,10 @@ impl Simulator {
             model: &mut self.model,
             signals: &mut self.signals,
             continuous: &self.minor,
-            stateful: &self.between.integrated,
+            stateful: &self.integrated,
             t_end: target,
         };
-        let x = &mut self.x[..self.between.n_integrated];
+        let x = &mut self.x[..self.n_integrated];
         let mut t_new = if x.is_empty() {
             // Nothing to integrate; max_step still bounds the adaptive
             // method's major steps so continuous sources are sampled finely.
@@ -466,7 +469,7 @@ impl Simulator {
             }
         }
         let mut clamped = false;
-        for &i in &self.between.integrated {
+        for &i in &self.integrated {
             let meta = &self.model.slots[i];
             clamped |= self.model.blocks[i].clamp_states(&mut self.x[meta.states.clone()]);
         }
