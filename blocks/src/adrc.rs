@@ -343,7 +343,7 @@ fn build_leso(p: &mut Params) -> Result<Built, Diagnostic> {
 
 /// The LSEF law; `alpha_ports` are input indices of tuned gains.
 #[derive(Clone)]
-struct Lsef {
+pub struct Lsef {
     alpha: [f64; 2],
     alpha_ports: [Option<usize>; 2],
     b0: f64,

@@ -91,7 +91,7 @@ impl PidLaw {
 /// decided per stage, it makes the right-hand side switch with the state,
 /// and an adaptive solver chatters on the limit with ever smaller steps.
 #[derive(Clone)]
-struct ContinuousPid {
+pub struct ContinuousPid {
     law: PidLaw,
     initial: f64,
     /// Integration stopped by clamping anti-windup (decided at major steps).

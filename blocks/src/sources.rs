@@ -102,7 +102,7 @@ struct TimeFn<F: Fn(&Io) -> f64 + Send + Clone> {
     events: Vec<f64>,
 }
 
-impl<F: Fn(&Io) -> f64 + Send + Clone> Block for TimeFn<F> {
+impl<F: Fn(&Io) -> f64 + Send + Clone + 'static> Block for TimeFn<F> {
     fn updates(&self) -> bool {
         false
     }

@@ -348,8 +348,13 @@ impl Kernel {
 
 /// A block of the library. See the module docs for when each method runs.
 /// Blocks are `Clone` (derive it): a snapshot of a run
-/// ([`crate::Simulator::state`]) copies every block's memory.
-pub trait Block: Send + dyn_clone::DynClone {
+/// ([`crate::Simulator::state`]) copies every block's memory. They are
+/// `Any` (every `'static` type is), so code that knows a graph's block
+/// types — a fused step, generated or written for a benchmark — can take
+/// a compiled model's blocks back as their concrete types
+/// (`Box<dyn Block>` → `Box<dyn Any>` → `downcast`) and call them without
+/// dynamic dispatch.
+pub trait Block: std::any::Any + Send + dyn_clone::DynClone {
     /// Receives the resolved common width (only called for blocks with a
     /// [`Width::Common`] port), before any other call. Allocate here.
     fn set_width(&mut self, _width: usize) -> Result<(), String> {

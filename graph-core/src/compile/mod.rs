@@ -401,6 +401,17 @@ impl Model {
         self.meta.iter().zip(&self.blocks).filter_map(|(m, b)| b.build_report().map(|r| (m.name.as_str(), r)))
     }
 
+    /// A copy of block `name` (flattened: `ctrl/td`) as its concrete type
+    /// `T`, in its built state; `None` when there is no such block or it
+    /// is not a `T`. Where a fused step starts: code that knows the
+    /// graph's block types calls them without dynamic dispatch, with the
+    /// parameters the graph gave them.
+    pub fn block_as<T: Block + Clone>(&self, name: &str) -> Option<T> {
+        let i = self.meta.iter().position(|m| m.name == name)?;
+        let block: &dyn std::any::Any = &*self.blocks[i];
+        block.downcast_ref::<T>().cloned()
+    }
+
     /// The block owning signal `offset` and the name of its output port.
     pub fn signal_owner(&self, offset: usize) -> Option<(usize, &str)> {
         self.meta.iter().enumerate().find_map(|(i, m)| {
