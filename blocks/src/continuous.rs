@@ -175,6 +175,19 @@ impl Lti {
     }
 }
 
+impl Lti {
+    /// y = C·x (+ D·u) into the scratch, then to the port.
+    #[inline(never)]
+    fn output_general(&mut self, io: &mut Io) {
+        if self.feedthrough {
+            self.ss.output(io.x, io.input(0), &mut self.y);
+        } else {
+            self.ss.output_state_only(io.x, &mut self.y);
+        }
+        io.set_all(0, &self.y);
+    }
+}
+
 impl Block for Lti {
     fn updates(&self) -> bool {
         false
@@ -186,15 +199,12 @@ impl Block for Lti {
         x0.copy_from_slice(&self.x0);
     }
     fn output(&mut self, io: &mut Io) {
-        if self.feedthrough {
-            self.ss.output(io.x, io.input(0), &mut self.y);
-        } else if self.y.len() == 1 {
-            // A transfer function: y = C·x straight to the port.
+        if !self.feedthrough && self.y.len() == 1 {
+            // A transfer function: y = C·x straight to the port (the
+            // common case, kept free of the general case's registers).
             return io.set(0, self.ss.output_state_only_scalar(io.x));
-        } else {
-            self.ss.output_state_only(io.x, &mut self.y);
         }
-        io.set_all(0, &self.y);
+        self.output_general(io);
     }
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
         if self.ss.m == 1 {

@@ -140,7 +140,13 @@ impl StateSpace {
     /// [`StateSpace::output_state_only`] of a single-output system.
     #[inline]
     pub fn output_state_only_scalar(&self, x: &[f64]) -> f64 {
-        row_times(&self.c, self.n, 0, x)
+        match self.n {
+            1 => dot::<1>(&self.c, x),
+            2 => dot::<2>(&self.c, x),
+            3 => dot::<3>(&self.c, x),
+            4 => dot::<4>(&self.c, x),
+            n => row_times(&self.c, n, 0, x),
+        }
     }
 }
 
@@ -158,6 +164,19 @@ pub(crate) fn affine_single_input<const N: usize>(m: &[f64], g: &[f64], x: &[f64
         }
         v + g[i] * u
     })
+}
+
+/// `c·x` over the first N elements, N known to the compiler: the sum of
+/// [`row_times`] in the same order (its float sum starts at −0, and
+/// −0 + p = p for every p, so starting at the first product is the same).
+#[inline]
+fn dot<const N: usize>(c: &[f64], x: &[f64]) -> f64 {
+    let (c, x) = (&c[..N], &x[..N]);
+    let mut v = c[0] * x[0];
+    for j in 1..N {
+        v += c[j] * x[j];
+    }
+    v
 }
 
 /// Row `i` of a row-major matrix with `cols` columns times `v`, summed in
@@ -250,6 +269,12 @@ mod tests {
                 let mut y = [0.0];
                 ss.output_state_only(&x, &mut y);
                 assert_eq!(y[0].to_bits(), ss.output_state_only_scalar(&x).to_bits());
+            }
+            // Signed zeros too: a sum of −0 products is −0 both ways.
+            for zero in [0.0, -0.0] {
+                let (x, mut y) = (vec![zero; ss.n], [1.0]);
+                ss.output_state_only(&x, &mut y);
+                assert_eq!(y[0].to_bits(), ss.output_state_only_scalar(&x).to_bits(), "x = {x:?}");
             }
         }
     }
