@@ -3,13 +3,19 @@
 //! Rust: the fuzzy-tuned LADRC and the plain LADRC, plant advanced by its
 //! exact zero-order-hold transition, every block's equation evaluated in
 //! the graph's order. Reported per run of the scenario; the README's table
-//! divides by 20 001 samples.
+//! divides by 20 001 samples. `ladrc_fused_blocks` runs the LADRC graph's
+//! own blocks without the interpreter (computing what it computes, to the
+//! bit): the price of the blocks' code apart from the interpreter's.
 //!
 //!     cargo bench --bench fladrc
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use ctlgraph_blocks::adrc::{Leso, Lsef, TrackingDifferentiator};
+use ctlgraph_blocks::continuous::Lti;
 use ctlgraph_blocks::fuzzy::fis::{Connective, Fis, Methods, Rule, Variable, uniform_triangles};
-use ctlgraph_core::Simulator;
+use ctlgraph_core::block::{Io, Port};
+use ctlgraph_core::{Block, Model, Simulator};
+use ctlgraph_solver::Zoh;
 use nalgebra::Matrix3;
 use std::hint::black_box;
 use std::path::Path;
@@ -226,9 +232,87 @@ fn hand_written(fuzzy: Option<&Fuzzy>, sigma: f64, (phi, gamma): ([[f64; 2]; 2],
     (sink, y)
 }
 
-fn simulator(file: &str, sets: &[(&str, &str)]) -> (Simulator, usize) {
+/// The LADRC graph's controller and plant as ctlgraph builds them, taken
+/// from the compiled graph as their concrete types and called in the
+/// graph's order without dispatch; sources, sums and noise as in the
+/// hand-written loop. What a compiled step (generated Rust calling the
+/// library's blocks) would run: the blocks' own code, without the
+/// interpreter's dispatch and bookkeeping.
+#[derive(Clone)]
+struct Fused {
+    td: TrackingDifferentiator,
+    leso: Leso,
+    lsef: Lsef,
+    plant: Lti,
+    zoh: Zoh,
+}
+
+const fn port(offset: usize, width: usize) -> Port {
+    Port { offset, width }
+}
+
+/// The fused loop's signals: 0 r, 1 r1, 2 r2, 3..6 z, 6 u, 7 y.
+mod fused_ports {
+    use super::{Port, port};
+    pub const TD_IN: [Port; 1] = [port(0, 1)];
+    pub const TD_OUT: [Port; 2] = [port(1, 1), port(2, 1)];
+    pub const LESO_IN: [Port; 2] = [port(7, 1), port(6, 1)];
+    pub const LESO_OUT: [Port; 1] = [port(3, 3)];
+    pub const LSEF_IN: [Port; 3] = [port(1, 1), port(2, 1), port(3, 3)];
+    pub const LSEF_OUT: [Port; 1] = [port(6, 1)];
+    pub const PLANT_OUT: [Port; 1] = [port(7, 1)];
+}
+
+impl Fused {
+    fn new(model: &Model) -> Self {
+        let plant: Lti = model.block_as("plant").expect("plant is an Lti");
+        let zoh = Zoh::new(plant.lti().expect("plant is LTI").clone());
+        Fused {
+            td: model.block_as("ctrl/td").expect("ctrl/td is a tracking differentiator"),
+            leso: model.block_as("ctrl/leso").expect("ctrl/leso is a LESO"),
+            lsef: model.block_as("ctrl/lsef").expect("ctrl/lsef is an LSEF"),
+            plant,
+            zoh,
+        }
+    }
+
+    /// The scenario: Σy over the samples and y at the end, as `hand_written`.
+    fn run(&mut self, sigma: f64) -> (f64, f64) {
+        use fused_ports::*;
+        let (mut s, mut x) = ([0.0f64; 8], [0.0f64; 2]);
+        self.td.initialize(&mut []);
+        self.leso.initialize(&mut []);
+        let (mut noise, mut held_noise, mut sink) = (Noise(1), 0.0, 0.0);
+        for k in 0..=SAMPLES {
+            let t = k as f64 * H;
+            let d = if k >= 6000 { 0.5 } else { 0.0 } + if (12_000..16_000).contains(&k) { held_noise } else { 0.0 };
+            s[0] = 1.0;
+            self.td.output(&mut Io::new(t, false, &[], &mut s, &[], &TD_OUT));
+            self.leso.output(&mut Io::new(t, false, &[], &mut s, &[], &LESO_OUT));
+            self.lsef.output(&mut Io::new(t, false, &[], &mut s, &LSEF_IN, &LSEF_OUT));
+            self.plant.output(&mut Io::new(t, false, &x, &mut s, &[], &PLANT_OUT));
+            sink += s[7];
+            if k == SAMPLES {
+                break;
+            }
+            self.td.update(&mut Io::new(t, false, &[], &mut s, &TD_IN, &TD_OUT));
+            self.leso.update(&mut Io::new(t, false, &[], &mut s, &LESO_IN, &LESO_OUT));
+            if k % 40 == 0 {
+                held_noise = sigma * noise.normal();
+            }
+            self.zoh.step(H, &mut x, &[s[6] + d]);
+        }
+        (sink, s[7])
+    }
+}
+
+fn model(file: &str, sets: &[(&str, &str)]) -> Model {
     let sets: Vec<(String, String)> = sets.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
-    let model = ctlgraph::compile_file(Path::new(file), &sets).expect("graph compiles");
+    ctlgraph::compile_file(Path::new(file), &sets).expect("graph compiles")
+}
+
+fn simulator(file: &str, sets: &[(&str, &str)]) -> (Simulator, usize) {
+    let model = model(file, sets);
     let y = model.columns.iter().find(|c| c.name == "y").expect("y recorded").offset;
     (Simulator::new(model, None), y)
 }
@@ -257,6 +341,10 @@ fn bench(c: &mut Criterion) {
         let rel = (by_graph - by_hand).abs() / by_hand.abs();
         assert!(rel < 1e-12, "{file}: graph Σy = {by_graph} vs hand {by_hand}");
     }
+    let mut fused = Fused::new(&model("graphs/fladrc/ladrc.yaml", &[]));
+    let (by_fused, by_graph) =
+        (fused.run(0.0).0, graph(&mut simulator("graphs/fladrc/ladrc.yaml", &[("noise_power", "0")])).0);
+    assert_eq!(by_fused, by_graph, "the fused blocks compute what the interpreter does, to the bit");
     let sigma = (1.44e-5f64 / 0.004).sqrt();
     let mut group = c.benchmark_group("fladrc_scenario_20k_samples");
     group.sample_size(30);
@@ -266,6 +354,7 @@ fn bench(c: &mut Criterion) {
     let mut sim = simulator("graphs/fladrc/ladrc.yaml", &[]);
     group.bench_function("ladrc_hand_written", |b| b.iter(|| black_box(hand_written(None, sigma, zoh))));
     group.bench_function("ladrc_ctlgraph", |b| b.iter(|| black_box(graph(&mut sim))));
+    group.bench_function("ladrc_fused_blocks", |b| b.iter(|| black_box(fused.run(sigma))));
     group.finish();
     // The fuzzy system alone, one evaluation, hand-written and as a block.
     let mut group = c.benchmark_group("fuzzy_7x7_two_outputs");

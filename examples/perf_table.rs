@@ -100,7 +100,19 @@ pub fn tables(root: &Path) -> Result<String, String> {
         fis / hand
     ));
     out.push_str(
-        "| n | compile, chain | compile, fan-out (2n blocks) | ns per block-step, chain (RK4) |\n|---|---|---|---|\n",
+        "| the graph's blocks fused by hand (no interpreter) | hand-written | blocks fused | ratio |\n|---|---|---|---|\n",
+    );
+    let fused_rows = [
+        ("LADRC paper (`fladrc`)", "fladrc_scenario_20k_samples/ladrc_", SCENARIO_SAMPLES, "sample"),
+        ("tutorial PID loop (`overhead`)", "pid_loop_10k_rk4_steps/", PID_STEPS, "step"),
+    ];
+    for (name, prefix, count, what) in fused_rows {
+        let (hand, fused) = (m(&format!("{prefix}hand_written"))?, m(&format!("{prefix}fused_blocks"))?);
+        let (hand_cell, fused_cell) = (per(hand, count, what), per(fused, count, what));
+        out.push_str(&format!("| {name} | {hand_cell} | {fused_cell} | {:.2}× |\n", fused / hand));
+    }
+    out.push_str(
+        "\n| n | compile, chain | compile, fan-out (2n blocks) | ns per block-step, chain (RK4) |\n|---|---|---|---|\n",
     );
     for n in [10u32, 1_000, 100_000] {
         let (chain, fan) = (m(&format!("chain_compile/{n}"))?, m(&format!("fan_out_compile/{n}"))?);

@@ -26,6 +26,8 @@ fn tables_divide_the_medians_as_they_say() {
         ("fladrc_scenario_20k_samples/ladrc_ctlgraph", 3.0 * ms),
         ("pid_loop_10k_rk4_steps/hand_written", 0.5 * ms),
         ("pid_loop_10k_rk4_steps/ctlgraph", 1.5 * ms),
+        ("fladrc_scenario_20k_samples/ladrc_fused_blocks", 0.6 * ms),
+        ("pid_loop_10k_rk4_steps/fused_blocks", 1.0 * ms),
         ("fuzzy_7x7_two_outputs/hand_written", 300.0),
         ("fuzzy_7x7_two_outputs/ctlgraph_fis", 150.0),
         ("chain_compile/10", 0.2 * ms),
@@ -48,6 +50,11 @@ fn tables_divide_the_medians_as_they_say() {
     assert!(text.contains("| 300 µs (15.0 ns/sample) | 3.00 ms (150 ns/sample) | 10.00× |"), "{text}");
     assert!(text.contains("| 500 µs (50.0 ns/step) | 1.50 ms (150 ns/step) | 3.00× |"), "{text}");
     assert!(text.contains("| 300 ns | 150 ns | 0.50× |"), "{text}");
+    assert!(
+        text.contains("| LADRC paper (`fladrc`) | 300 µs (15.0 ns/sample) | 600 µs (30.0 ns/sample) | 2.00× |"),
+        "{text}"
+    );
+    assert!(text.contains("| 500 µs (50.0 ns/step) | 1.00 ms (100 ns/step) | 2.00× |"), "{text}");
     // 1 s for 100 steps of 100 000 blocks: 100 ns a block-step.
     assert!(text.contains("| 100 000 | 2.00 s | 3.00 s | 100 |"), "{text}");
     assert!(text.contains("| 10 | 200 µs | 300 µs | 50 |"), "{text}");
