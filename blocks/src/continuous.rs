@@ -186,6 +186,12 @@ impl Lti {
         }
         io.set_all(0, &self.y);
     }
+
+    /// dx = A·x + B·u for several inputs, out of line like `output_general`.
+    #[inline(never)]
+    fn derivatives_general(&self, io: &Io, dx: &mut [f64]) {
+        self.ss.derivative(io.x, io.input(0), dx);
+    }
 }
 
 impl Block for Lti {
@@ -208,10 +214,9 @@ impl Block for Lti {
     }
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
         if self.ss.m == 1 {
-            self.ss.derivative_single_input(io.x, io.u(0), dx);
-        } else {
-            self.ss.derivative(io.x, io.input(0), dx);
+            return self.ss.derivative_single_input(io.x, io.u(0), dx);
         }
+        self.derivatives_general(io, dx);
     }
     fn lti(&self) -> Option<&StateSpace> {
         Some(&self.ss)

@@ -112,11 +112,17 @@ impl StateSpace {
             2 => dx[..2].copy_from_slice(&affine_single_input::<2>(a, b, x, u)),
             3 => dx[..3].copy_from_slice(&affine_single_input::<3>(a, b, x, u)),
             4 => dx[..4].copy_from_slice(&affine_single_input::<4>(a, b, x, u)),
-            n => {
-                for (i, d) in dx.iter_mut().enumerate().take(n) {
-                    *d = row_times(a, n, i, x) + b[i] * u;
-                }
-            }
+            _ => self.derivative_single_input_general(x, u, dx),
+        }
+    }
+
+    /// The general loop of [`StateSpace::derivative_single_input`], out of
+    /// line so that the unrolled sizes' path saves no registers for it.
+    #[inline(never)]
+    fn derivative_single_input_general(&self, x: &[f64], u: f64, dx: &mut [f64]) {
+        let n = self.n;
+        for (i, d) in dx.iter_mut().enumerate().take(n) {
+            *d = row_times(&self.a, n, i, x) + self.b[i] * u;
         }
     }
 
