@@ -20,6 +20,9 @@ use nalgebra::Matrix3;
 use std::hint::black_box;
 use std::path::Path;
 
+mod paired;
+use paired::Paired;
+
 /// The command line's allocator (src/main.rs), so the benches measure what it does.
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -346,16 +349,26 @@ fn bench(c: &mut Criterion) {
         (fused.run(0.0).0, graph(&mut simulator("graphs/fladrc/ladrc.yaml", &[("noise_power", "0")])).0);
     assert_eq!(by_fused, by_graph, "the fused blocks compute what the interpreter does, to the bit");
     let sigma = (1.44e-5f64 / 0.004).sqrt();
-    let mut group = c.benchmark_group("fladrc_scenario_20k_samples");
-    group.sample_size(30);
+    const GROUP: &str = "fladrc_scenario_20k_samples";
+    const SAMPLES: usize = 30;
+    let mut group = c.benchmark_group(GROUP);
+    group.sample_size(SAMPLES);
+    let mut paired = [
+        Paired::new(GROUP, "fladrc_ctlgraph", "fladrc_hand_written"),
+        Paired::new(GROUP, "ladrc_ctlgraph", "ladrc_hand_written"),
+        Paired::new(GROUP, "ladrc_fused_blocks", "ladrc_hand_written"),
+    ];
+    let (fladrc_by_hand, ladrc_by_hand) =
+        (|| hand_written(Some(&fuzzy), sigma, zoh), || hand_written(None, sigma, zoh));
     let mut sim = simulator("graphs/fladrc/fladrc.yaml", &[]);
-    group.bench_function("fladrc_hand_written", |b| b.iter(|| black_box(hand_written(Some(&fuzzy), sigma, zoh))));
-    group.bench_function("fladrc_ctlgraph", |b| b.iter(|| black_box(graph(&mut sim))));
+    group.bench_function("fladrc_hand_written", |b| b.iter(|| black_box(fladrc_by_hand())));
+    group.bench_function("fladrc_ctlgraph", |b| paired[0].run(b, || graph(&mut sim), fladrc_by_hand));
     let mut sim = simulator("graphs/fladrc/ladrc.yaml", &[]);
-    group.bench_function("ladrc_hand_written", |b| b.iter(|| black_box(hand_written(None, sigma, zoh))));
-    group.bench_function("ladrc_ctlgraph", |b| b.iter(|| black_box(graph(&mut sim))));
-    group.bench_function("ladrc_fused_blocks", |b| b.iter(|| black_box(fused.run(sigma))));
+    group.bench_function("ladrc_hand_written", |b| b.iter(|| black_box(ladrc_by_hand())));
+    group.bench_function("ladrc_ctlgraph", |b| paired[1].run(b, || graph(&mut sim), ladrc_by_hand));
+    group.bench_function("ladrc_fused_blocks", |b| paired[2].run(b, || fused.run(sigma), ladrc_by_hand));
     group.finish();
+    paired.iter().for_each(|p| p.save(SAMPLES));
     // The fuzzy system alone, one evaluation, hand-written and as a block.
     let mut group = c.benchmark_group("fuzzy_7x7_two_outputs");
     let mut input = 0.0f64;

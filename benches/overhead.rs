@@ -14,6 +14,9 @@ use ctlgraph_core::{Block, Model, Simulator};
 use ctlgraph_solver::{Integrator, Method, OdeSystem};
 use std::hint::black_box;
 
+mod paired;
+use paired::Paired;
+
 /// The command line's allocator (src/main.rs), so the benches measure what it does.
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -169,11 +172,17 @@ fn bench(c: &mut Criterion) {
     let (by_graph, by_hand) = (sim.signals()[plant], hand_written().1);
     assert!((by_graph - by_hand).abs() < 1e-12, "graph {by_graph} vs hand {by_hand}");
     assert_eq!(fused.run(), sum_u, "the fused blocks compute what the interpreter does, to the bit");
-    let mut group = c.benchmark_group("pid_loop_10k_rk4_steps");
+    const GROUP: &str = "pid_loop_10k_rk4_steps";
+    const SAMPLES: usize = 100;
+    let mut group = c.benchmark_group(GROUP);
+    group.sample_size(SAMPLES);
+    let mut paired =
+        [Paired::new(GROUP, "ctlgraph", "hand_written"), Paired::new(GROUP, "fused_blocks", "hand_written")];
     group.bench_function("hand_written", |b| b.iter(|| black_box(hand_written().0)));
-    group.bench_function("ctlgraph", |b| b.iter(|| black_box(graph(&mut sim))));
-    group.bench_function("fused_blocks", |b| b.iter(|| black_box(fused.run())));
+    group.bench_function("ctlgraph", |b| paired[0].run(b, || graph(&mut sim), hand_written));
+    group.bench_function("fused_blocks", |b| paired[1].run(b, || fused.run(), hand_written));
     group.finish();
+    paired.iter().for_each(|p| p.save(SAMPLES));
 }
 
 criterion_group!(benches, bench);

@@ -39,6 +39,17 @@ fn median(root: &Path, id: &str) -> Result<f64, String> {
     Ok(ns * 1e-9)
 }
 
+/// The median of the per-sample ratios of paired benchmark `id` (see
+/// benches/paired/mod.rs): each sample times it right after its
+/// hand-written reference.
+fn paired_ratio(root: &Path, id: &str) -> Result<f64, String> {
+    let file = root.join(id).join("paired_ratio.json");
+    let text = std::fs::read_to_string(&file)
+        .map_err(|e| format!("{}: {e} (run the benches first: see this example's doc)", file.display()))?;
+    let json: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{}: {e}", file.display()))?;
+    json["median_ratio"].as_f64().ok_or_else(|| format!("{}: no median_ratio", file.display()))
+}
+
 /// A duration with three significant digits in a unit that suits it.
 fn duration(seconds: f64) -> String {
     let (value, unit) = match seconds {
@@ -74,7 +85,10 @@ fn grouped(n: f64) -> String {
 pub fn tables(root: &Path) -> Result<String, String> {
     let m = |id: &str| median(root, id);
     let mut out = String::new();
-    out.push_str("| scenario (`cargo bench --bench …`) | hand-written | ctlgraph | ratio |\n|---|---|---|---|\n");
+    let paired = |id: &str| paired_ratio(root, id);
+    out.push_str(
+        "| scenario (`cargo bench --bench …`) | hand-written | ctlgraph | ratio | paired ratio |\n|---|---|---|---|---|\n",
+    );
     let per = |total: f64, count: f64, what: &str| format!("{} ({}/{what})", duration(total), duration(total / count));
     let rows = [
         (
@@ -90,17 +104,18 @@ pub fn tables(root: &Path) -> Result<String, String> {
         let sep = if prefix.ends_with('/') { "" } else { "_" };
         let (hand, graph) = (m(&format!("{prefix}{sep}hand_written"))?, m(&format!("{prefix}{sep}ctlgraph"))?);
         let (hand_cell, graph_cell) = (per(hand, count, what), per(graph, count, what));
-        out.push_str(&format!("| {name} | {hand_cell} | {graph_cell} | {:.2}× |\n", graph / hand));
+        let pair = paired(&format!("{prefix}{sep}ctlgraph"))?;
+        out.push_str(&format!("| {name} | {hand_cell} | {graph_cell} | {:.2}× | {pair:.2}× |\n", graph / hand));
     }
     let (hand, fis) = (m("fuzzy_7x7_two_outputs/hand_written")?, m("fuzzy_7x7_two_outputs/ctlgraph_fis")?);
     out.push_str(&format!(
-        "| the paper's 7×7 two-output fuzzy system, one evaluation (`fladrc`) | {} | {} | {:.2}× |\n\n",
+        "| the paper's 7×7 two-output fuzzy system, one evaluation (`fladrc`) | {} | {} | {:.2}× | — |\n\n",
         duration(hand),
         duration(fis),
         fis / hand
     ));
     out.push_str(
-        "| the graph's blocks fused by hand (no interpreter) | hand-written | blocks fused | ratio |\n|---|---|---|---|\n",
+        "| the graph's blocks fused by hand (no interpreter) | hand-written | blocks fused | ratio | paired ratio |\n|---|---|---|---|---|\n",
     );
     let fused_rows = [
         ("LADRC paper (`fladrc`)", "fladrc_scenario_20k_samples/ladrc_", SCENARIO_SAMPLES, "sample"),
@@ -109,7 +124,8 @@ pub fn tables(root: &Path) -> Result<String, String> {
     for (name, prefix, count, what) in fused_rows {
         let (hand, fused) = (m(&format!("{prefix}hand_written"))?, m(&format!("{prefix}fused_blocks"))?);
         let (hand_cell, fused_cell) = (per(hand, count, what), per(fused, count, what));
-        out.push_str(&format!("| {name} | {hand_cell} | {fused_cell} | {:.2}× |\n", fused / hand));
+        let pair = paired(&format!("{prefix}fused_blocks"))?;
+        out.push_str(&format!("| {name} | {hand_cell} | {fused_cell} | {:.2}× | {pair:.2}× |\n", fused / hand));
     }
     out.push_str(
         "\n| n | compile, chain | compile, fan-out (2n blocks) | ns per block-step, chain (RK4) |\n|---|---|---|---|\n",

@@ -44,17 +44,26 @@ fn tables_divide_the_medians_as_they_say() {
     ] {
         write_median(root, id, ns);
     }
+    for (id, ratio) in [
+        ("fladrc_scenario_20k_samples/fladrc_ctlgraph", 1.5),
+        ("fladrc_scenario_20k_samples/ladrc_ctlgraph", 8.0),
+        ("fladrc_scenario_20k_samples/ladrc_fused_blocks", 2.5),
+        ("pid_loop_10k_rk4_steps/ctlgraph", 3.25),
+        ("pid_loop_10k_rk4_steps/fused_blocks", 2.25),
+    ] {
+        let json = format!(r#"{{"median_ratio":{ratio},"samples":30,"reference":"x"}}"#);
+        std::fs::write(root.join(id).join("paired_ratio.json"), json).unwrap();
+    }
     let text = perf_table::tables(root).unwrap();
-    // 10 ms over 20 001 samples is 500 ns a sample; twice the hand-written.
-    assert!(text.contains("| 5.00 ms (250 ns/sample) | 10.0 ms (500 ns/sample) | 2.00× |"), "{text}");
-    assert!(text.contains("| 300 µs (15.0 ns/sample) | 3.00 ms (150 ns/sample) | 10.00× |"), "{text}");
-    assert!(text.contains("| 500 µs (50.0 ns/step) | 1.50 ms (150 ns/step) | 3.00× |"), "{text}");
-    assert!(text.contains("| 300 ns | 150 ns | 0.50× |"), "{text}");
-    assert!(
-        text.contains("| LADRC paper (`fladrc`) | 300 µs (15.0 ns/sample) | 600 µs (30.0 ns/sample) | 2.00× |"),
-        "{text}"
-    );
-    assert!(text.contains("| 500 µs (50.0 ns/step) | 1.00 ms (100 ns/step) | 2.00× |"), "{text}");
+    // 10 ms over 20 001 samples is 500 ns a sample; twice the hand-written
+    // (the ratio of the medians), then the paired benchmark's own ratio.
+    assert!(text.contains("| 5.00 ms (250 ns/sample) | 10.0 ms (500 ns/sample) | 2.00× | 1.50× |"), "{text}");
+    assert!(text.contains("| 300 µs (15.0 ns/sample) | 3.00 ms (150 ns/sample) | 10.00× | 8.00× |"), "{text}");
+    assert!(text.contains("| 500 µs (50.0 ns/step) | 1.50 ms (150 ns/step) | 3.00× | 3.25× |"), "{text}");
+    assert!(text.contains("| 300 ns | 150 ns | 0.50× | — |"), "{text}");
+    let fused = "| LADRC paper (`fladrc`) | 300 µs (15.0 ns/sample) | 600 µs (30.0 ns/sample) | 2.00× | 2.50× |";
+    assert!(text.contains(fused), "{text}");
+    assert!(text.contains("| 500 µs (50.0 ns/step) | 1.00 ms (100 ns/step) | 2.00× | 2.25× |"), "{text}");
     // 1 s for 100 steps of 100 000 blocks: 100 ns a block-step.
     assert!(text.contains("| 100 000 | 2.00 s | 3.00 s | 100 |"), "{text}");
     assert!(text.contains("| 10 | 200 µs | 300 µs | 50 |"), "{text}");
