@@ -231,3 +231,23 @@ fn a_subsystems_ports_are_signals_by_name() {
     let lin = ctlgraph::core::linearize::linearize(model, &sel).unwrap();
     assert_eq!(lin.input, "soft.y");
 }
+
+/// A compiled graph's block comes back as its concrete type, built with
+/// the graph's parameters (what a fused step starts from); a wrong type or
+/// name gives none.
+#[test]
+fn a_compiled_block_comes_back_as_its_type() {
+    use ctlgraph_blocks::adrc::{Leso, TrackingDifferentiator};
+    use ctlgraph_blocks::continuous::Lti;
+    use ctlgraph_core::Block;
+    let model = ctlgraph::compile_file(Path::new("graphs/fladrc/ladrc.yaml"), &[]).unwrap();
+    let plant: Lti = model.block_as("plant").expect("the plant is an Lti");
+    // 1.639e4 / (s² + 154.8 s + 2.242e4) in controllable canonical form.
+    let ss = plant.lti().unwrap();
+    assert_eq!((ss.a.as_slice(), ss.c.as_slice()), (&[-154.8, -2.242e4, 1.0, 0.0][..], &[0.0, 1.639e4][..]));
+    let leso: Leso = model.block_as("ctrl/leso").expect("a subsystem's block by its flattened name");
+    assert_eq!(leso.state(), &[0.0, 0.0, 0.0]);
+    assert!(model.block_as::<Leso>("ctrl/td").is_none(), "ctrl/td is not a LESO");
+    assert!(model.block_as::<TrackingDifferentiator>("ctrl/td").is_some());
+    assert!(model.block_as::<Lti>("no_such_block").is_none());
+}
