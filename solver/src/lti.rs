@@ -108,10 +108,10 @@ impl StateSpace {
     pub fn derivative_single_input(&self, x: &[f64], u: f64, dx: &mut [f64]) {
         let (a, b) = (&self.a, &self.b);
         match self.n {
-            1 => dx[..1].copy_from_slice(&affine_single_input::<1>(a, b, x, u)),
-            2 => dx[..2].copy_from_slice(&affine_single_input::<2>(a, b, x, u)),
-            3 => dx[..3].copy_from_slice(&affine_single_input::<3>(a, b, x, u)),
-            4 => dx[..4].copy_from_slice(&affine_single_input::<4>(a, b, x, u)),
+            1 => dx[..1].copy_from_slice(&affine_single_input::<1>(a, b, x, u, -0.0)),
+            2 => dx[..2].copy_from_slice(&affine_single_input::<2>(a, b, x, u, -0.0)),
+            3 => dx[..3].copy_from_slice(&affine_single_input::<3>(a, b, x, u, -0.0)),
+            4 => dx[..4].copy_from_slice(&affine_single_input::<4>(a, b, x, u, -0.0)),
             _ => self.derivative_single_input_general(x, u, dx),
         }
     }
@@ -158,13 +158,15 @@ impl StateSpace {
 
 /// `M·x + g·u` for N states and one input (M row-major N×N), with N known
 /// to the compiler so the loops unroll: a transfer function's usual
-/// realisation. The general loops' sums, in the same order.
+/// realisation. The general loops' sums, in the same order, from `start`:
+/// the value their sum starts at (0, or −0 as a float `sum` does — the two
+/// differ only in the sign of a zero result).
 #[inline]
-pub(crate) fn affine_single_input<const N: usize>(m: &[f64], g: &[f64], x: &[f64], u: f64) -> [f64; N] {
+pub(crate) fn affine_single_input<const N: usize>(m: &[f64], g: &[f64], x: &[f64], u: f64, start: f64) -> [f64; N] {
     let now: [f64; N] = std::array::from_fn(|j| x[j]);
     let (m, g) = (&m[..N * N], &g[..N]);
     std::array::from_fn(|i| {
-        let mut v = 0.0;
+        let mut v = start;
         for j in 0..N {
             v += m[i * N + j] * now[j];
         }
@@ -281,6 +283,11 @@ mod tests {
                 let (x, mut y) = (vec![zero; ss.n], [1.0]);
                 ss.output_state_only(&x, &mut y);
                 assert_eq!(y[0].to_bits(), ss.output_state_only_scalar(&x).to_bits(), "x = {x:?}");
+                let (mut general, mut single) = (vec![1.0; ss.n], vec![1.0; ss.n]);
+                ss.derivative(&x, &[zero], &mut general);
+                ss.derivative_single_input(&x, zero, &mut single);
+                let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&general), bits(&single), "x = {x:?}, u = {zero}");
             }
         }
     }

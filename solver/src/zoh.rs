@@ -202,7 +202,7 @@ fn multiply(a: &[f64], b: &[f64], c: &mut [f64], k: usize) {
 
 /// `x ← Φ·x + γ·u` for N states and one input (see [`affine_single_input`]).
 fn step_single_input<const N: usize>(phi: &[f64], gamma: &[f64], x: &mut [f64], u: f64) {
-    let next = affine_single_input::<N>(phi, gamma, x, u);
+    let next = affine_single_input::<N>(phi, gamma, x, u, 0.0);
     x[..N].copy_from_slice(&next);
 }
 
