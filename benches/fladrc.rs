@@ -241,7 +241,6 @@ fn hand_written(fuzzy: Option<&Fuzzy>, sigma: f64, (phi, gamma): ([[f64; 2]; 2],
 /// hand-written loop. What a compiled step (generated Rust calling the
 /// library's blocks) would run: the blocks' own code, without the
 /// interpreter's dispatch and bookkeeping.
-#[derive(Clone)]
 struct Fused {
     td: TrackingDifferentiator,
     leso: Leso,
@@ -350,9 +349,9 @@ fn bench(c: &mut Criterion) {
     assert_eq!(by_fused, by_graph, "the fused blocks compute what the interpreter does, to the bit");
     let sigma = (1.44e-5f64 / 0.004).sqrt();
     const GROUP: &str = "fladrc_scenario_20k_samples";
-    const SAMPLES: usize = 30;
+    const CRITERION_SAMPLES: usize = 30;
     let mut group = c.benchmark_group(GROUP);
-    group.sample_size(SAMPLES);
+    group.sample_size(CRITERION_SAMPLES);
     let mut paired = [
         Paired::new(GROUP, "fladrc_ctlgraph", "fladrc_hand_written"),
         Paired::new(GROUP, "ladrc_ctlgraph", "ladrc_hand_written"),
@@ -368,7 +367,7 @@ fn bench(c: &mut Criterion) {
     group.bench_function("ladrc_ctlgraph", |b| paired[1].run(b, || graph(&mut sim), ladrc_by_hand));
     group.bench_function("ladrc_fused_blocks", |b| paired[2].run(b, || fused.run(sigma), ladrc_by_hand));
     group.finish();
-    paired.iter().for_each(|p| p.save(SAMPLES));
+    paired.iter().for_each(|p| p.save(CRITERION_SAMPLES));
     // The fuzzy system alone, one evaluation, hand-written and as a block.
     let mut group = c.benchmark_group("fuzzy_7x7_two_outputs");
     let mut input = 0.0f64;

@@ -87,7 +87,6 @@ fn hand_written() -> (f64, f64) {
 /// the compiled graph as their concrete types and called in the graph's
 /// order at every stage without dispatch (the sum and the step written
 /// out): what a compiled step calling the library's blocks would run.
-#[derive(Clone)]
 struct Fused {
     pid: ContinuousPid,
     plant: Lti,
@@ -173,16 +172,16 @@ fn bench(c: &mut Criterion) {
     assert!((by_graph - by_hand).abs() < 1e-12, "graph {by_graph} vs hand {by_hand}");
     assert_eq!(fused.run(), sum_u, "the fused blocks compute what the interpreter does, to the bit");
     const GROUP: &str = "pid_loop_10k_rk4_steps";
-    const SAMPLES: usize = 100;
+    const CRITERION_SAMPLES: usize = 100;
     let mut group = c.benchmark_group(GROUP);
-    group.sample_size(SAMPLES);
+    group.sample_size(CRITERION_SAMPLES);
     let mut paired =
         [Paired::new(GROUP, "ctlgraph", "hand_written"), Paired::new(GROUP, "fused_blocks", "hand_written")];
     group.bench_function("hand_written", |b| b.iter(|| black_box(hand_written().0)));
     group.bench_function("ctlgraph", |b| paired[0].run(b, || graph(&mut sim), hand_written));
     group.bench_function("fused_blocks", |b| paired[1].run(b, || fused.run(), hand_written));
     group.finish();
-    paired.iter().for_each(|p| p.save(SAMPLES));
+    paired.iter().for_each(|p| p.save(CRITERION_SAMPLES));
 }
 
 criterion_group!(benches, bench);

@@ -47,12 +47,15 @@ impl Paired {
     }
 
     /// Writes the median of the last `samples` ratios (criterion's samples
-    /// come after its warm-up, which also calls the routine).
+    /// come after its warm-up, which also calls the routine). Nothing when
+    /// the benchmark did not measure: filtered out, or run by `--test` or
+    /// `--profile-time` (a profiler's run, whose timings mean nothing).
     pub fn save(&self, samples: usize) {
-        let mut last: Vec<f64> = self.ratios[self.ratios.len().saturating_sub(samples)..].to_vec();
-        if last.is_empty() {
-            return; // filtered out on the command line
+        let not_measuring = std::env::args().any(|a| a == "--test" || a == "--profile-time");
+        if not_measuring || self.ratios.len() < samples {
+            return;
         }
+        let mut last: Vec<f64> = self.ratios[self.ratios.len() - samples..].to_vec();
         last.sort_by(f64::total_cmp);
         let mid = last.len() / 2;
         let median = if last.len() % 2 == 1 { last[mid] } else { 0.5 * (last[mid - 1] + last[mid]) };

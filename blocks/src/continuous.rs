@@ -173,9 +173,7 @@ impl Lti {
             .output("y", Width::Fixed(self.ss.p));
         Built::new(self, iface)
     }
-}
 
-impl Lti {
     /// y = C·x (+ D·u) into the scratch, then to the port.
     #[inline(never)]
     fn output_general(&mut self, io: &mut Io) {
