@@ -7,32 +7,18 @@
 //!     cargo bench --bench overhead
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use ctlgraph_blocks::continuous::Lti;
-use ctlgraph_blocks::pid::ContinuousPid;
-use ctlgraph_core::block::{Io, Port};
-use ctlgraph_core::{Block, Model, Simulator};
+use ctlgraph_core::Simulator;
 use ctlgraph_solver::{Integrator, Method, OdeSystem};
 use std::hint::black_box;
 
+mod fused_pid;
 mod paired;
+use fused_pid::{Fused, GRAPH, STEP, STEPS};
 use paired::Paired;
 
 /// The command line's allocator (src/main.rs), so the benches measure what it does.
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
-
-const STEP: f64 = 1.0e-4;
-const STEPS: usize = 10_000;
-
-const GRAPH: &str = "
-simulation: { stop: 100.0, solver: { method: rk4, step: 1.0e-4 } }
-blocks:
-  r:     { type: step, at: 0.0 }
-  err:   { type: sum, signs: \"+-\" }
-  ctrl:  { type: pid, kp: 2.0, ki: 15.0, kd: 0.1, n: 200, lower: -5, upper: 5 }
-  plant: { type: transfer_function, num: [100], den: [1, 6, 100] }
-wires: [r -> err.u1, plant -> err.u2, err -> ctrl, ctrl -> plant]
-";
 
 /// The same loop by hand: plant in controllable canonical form, PID states
 /// [I, x_f], clamping anti-windup decided at major steps and held through
@@ -83,66 +69,6 @@ fn hand_written() -> (f64, f64) {
     (sink, 100.0 * x[1])
 }
 
-/// The graph's PID and plant blocks as ctlgraph builds them, taken from
-/// the compiled graph as their concrete types and called in the graph's
-/// order at every stage without dispatch (the sum and the step written
-/// out): what a compiled step calling the library's blocks would run.
-struct Fused {
-    pid: ContinuousPid,
-    plant: Lti,
-    /// Signals: 0 r − y, 1 u, 2 y.
-    s: [f64; 3],
-}
-
-const ERROR: [Port; 1] = [Port { offset: 0, width: 1 }];
-const CONTROL: [Port; 1] = [Port { offset: 1, width: 1 }];
-const PLANT_OUT: [Port; 1] = [Port { offset: 2, width: 1 }];
-
-impl Fused {
-    fn new(model: &Model) -> Self {
-        let pid = model.block_as("ctrl").expect("ctrl is a continuous PID");
-        Fused { pid, plant: model.block_as("plant").expect("plant is an Lti"), s: [0.0; 3] }
-    }
-
-    /// The outputs at state x = [PID's 2, plant's 2].
-    #[inline]
-    fn outputs(&mut self, t: f64, x: &[f64]) {
-        let (xc, xp) = x.split_at(2);
-        self.plant.output(&mut Io::new(t, false, xp, &mut self.s, &[], &PLANT_OUT));
-        self.s[0] = 1.0 - self.s[2];
-        self.pid.output(&mut Io::new(t, false, xc, &mut self.s, &ERROR, &CONTROL));
-    }
-
-    /// The run: Σu over the major steps, as `hand_written`.
-    fn run(&mut self) -> f64 {
-        let mut integ = Integrator::new(Method::Rk4 { step: STEP }, 4);
-        let mut x = [0.0; 4];
-        self.pid.initialize(&mut x[..2]);
-        self.plant.initialize(&mut x[2..]);
-        let (mut t, mut sink) = (0.0, 0.0);
-        for k in 1..=STEPS {
-            self.outputs(t, &x);
-            sink += self.s[1];
-            self.pid.update(&mut Io::new(t, false, &x[..2], &mut self.s, &ERROR, &CONTROL));
-            // The step's end as the simulator's time grid has it: for a
-            // step of 1/n s, k/n (exact at decimal times), not k·step.
-            let target = k as f64 / 10_000.0;
-            integ.advance(self, t, target, &mut x).expect("finite");
-            t = target;
-        }
-        sink
-    }
-}
-
-impl OdeSystem for Fused {
-    fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
-        self.outputs(t, x);
-        let ((xc, xp), (dc, dp)) = (x.split_at(2), dx.split_at_mut(2));
-        self.pid.derivatives(&Io::new(t, false, xc, &mut self.s, &ERROR, &CONTROL).in_minor_step(false), dc);
-        self.plant.derivatives(&Io::new(t, false, xp, &mut self.s, &CONTROL, &PLANT_OUT).in_minor_step(false), dp);
-    }
-}
-
 fn graph(sim: &mut Simulator) -> f64 {
     sim.reset();
     let mut sink = 0.0;
@@ -161,12 +87,7 @@ fn bench(c: &mut Criterion) {
     let mut fused = Fused::new(&model);
     let mut sim = Simulator::new(model, None);
     // Same equations, same integrator: the three agree before they are timed.
-    let mut sum_u = 0.0;
-    for _ in 0..STEPS {
-        sim.outputs().expect("finite");
-        sum_u += sim.signals()[ctrl];
-        sim.advance().expect("advances");
-    }
+    let sum_u = fused_pid::interpreted_sum_u(&mut sim, ctrl);
     sim.outputs().expect("finite");
     let (by_graph, by_hand) = (sim.signals()[plant], hand_written().1);
     assert!((by_graph - by_hand).abs() < 1e-12, "graph {by_graph} vs hand {by_hand}");
