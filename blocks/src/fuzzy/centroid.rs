@@ -238,10 +238,11 @@ struct Cell {
 /// and taking away 1.5·2⁵² leaves the nearest whole number (there the
 /// doubles are one apart), one more if that is below `v`. Exact for
 /// |v| < 2⁵¹; the callers clamp the result to the grid's indices (at most
-/// 100 001), so a position far outside them lands on the same index. The libm call `f64::ceil` compiles to on baseline x86-64 (no
-/// SSE4.1) costs more than the rest of a piece, and a conversion to an
-/// integer and back is several instructions (Rust's `as` saturates); so
-/// the grid indices here are whole numbers held in f64.
+/// 100 001), so a position far outside them lands on the same index.
+/// Why not `f64::ceil`: on baseline x86-64 (no SSE4.1) it is a libm call
+/// that costs more than the rest of a piece, and converting to an integer
+/// and back is several instructions (Rust's `as` saturates); so the grid
+/// indices here are whole numbers held in f64.
 fn ceil(v: f64) -> f64 {
     const ROUND: f64 = 6_755_399_441_055_744.0;
     let nearest = (v + ROUND) - ROUND;
