@@ -407,22 +407,39 @@ impl Model {
     /// graph's block types calls them without dynamic dispatch, with the
     /// parameters the graph gave them.
     pub fn block_as<T: Block + Clone>(&self, name: &str) -> Option<T> {
-        let i = self.meta.iter().position(|m| m.name == name)?;
-        let block: &dyn std::any::Any = &*self.blocks[i];
+        self.block_at(self.meta.iter().position(|m| m.name == name)?)
+    }
+
+    /// A copy of the block at `index` (execution order) as its concrete
+    /// type `T`; `None` when there is none or it is not a `T`.
+    pub fn block_at<T: Block + Clone>(&self, index: usize) -> Option<T> {
+        let block: &dyn std::any::Any = &**self.blocks.get(index)?;
         block.downcast_ref::<T>().cloned()
+    }
+
+    /// A copy of the block at `index` (execution order), for code that
+    /// calls it without knowing its type.
+    pub fn block_boxed(&self, index: usize) -> Option<Box<dyn Block>> {
+        self.blocks.get(index).map(|b| dyn_clone::clone_box(&**b))
     }
 
     /// The block owning signal `offset` and the name of its output port.
     pub fn signal_owner(&self, offset: usize) -> Option<(usize, &str)> {
-        self.meta.iter().enumerate().find_map(|(i, m)| {
-            m.outputs.clone().find_map(|p| {
-                let port = self.out_ports[p];
-                (port.offset..port.offset + port.width)
-                    .contains(&offset)
-                    .then(|| (i, m.output_names[p - m.outputs.start].as_str()))
-            })
-        })
+        signal_owner(&self.meta, &self.out_ports, offset)
     }
+}
+
+/// The block (index into `meta`) owning signal `offset`, and the name of
+/// its output port.
+pub(crate) fn signal_owner<'m>(meta: &'m [BlockMeta], out_ports: &[Port], offset: usize) -> Option<(usize, &'m str)> {
+    meta.iter().enumerate().find_map(|(i, m)| {
+        m.outputs.clone().find_map(|p| {
+            let port = out_ports[p];
+            (port.offset..port.offset + port.width)
+                .contains(&offset)
+                .then(|| (i, m.output_names[p - m.outputs.start].as_str()))
+        })
+    })
 }
 
 /// Refuses a block whose events or sample hits, `interval` seconds apart,

@@ -14,7 +14,7 @@ mod error;
 mod events;
 mod host;
 mod minor;
-mod visit;
+pub(crate) mod visit;
 pub use error::SimError;
 pub use host::Snapshot;
 
@@ -32,7 +32,7 @@ use visit::Visit;
 /// rounded, so 47 steps of 0.01 give 0.47, the double nearest to 47/100,
 /// where 47·0.01 gives 0.47000000000000003.
 #[derive(Clone, Copy, Debug)]
-struct Grid {
+pub(crate) struct Grid {
     step: f64,
     per_unit: Option<f64>,
 }
@@ -54,21 +54,77 @@ impl Grid {
 
 /// One discrete rate's position on its own time line.
 #[derive(Clone, Copy, Debug)]
-struct Clock {
+pub(crate) struct Clock {
     grid: Grid,
     offset: f64,
     /// Index of the next hit not yet taken, and its time (kept, not
     /// recomputed: the step loop asks for it several times per step).
     tick: u64,
-    next: f64,
-    hit: bool,
+    pub(crate) next: f64,
+    pub(crate) hit: bool,
 }
 
 impl Clock {
-    fn set_tick(&mut self, tick: u64) {
+    fn new(step: f64, offset: f64) -> Self {
+        Clock { grid: Grid::new(step), offset, tick: 0, next: offset, hit: false }
+    }
+
+    pub(crate) fn set_tick(&mut self, tick: u64) {
         self.tick = tick;
         self.next = self.offset + self.grid.time(tick);
     }
+
+    /// Moves past the hits at or before `t` (within `tol`).
+    pub(crate) fn pass(&mut self, t: f64, tol: f64) {
+        while self.next <= t + tol {
+            self.set_tick(self.tick + 1);
+        }
+    }
+}
+
+/// How a run keeps time, as the simulator and a generated step
+/// ([`crate::codegen::Compiled`]) both keep it.
+#[derive(Clone, Debug)]
+pub(crate) struct Timing {
+    pub(crate) method: Method,
+    /// The fixed-step grid's step (0 for the adaptive methods) and its clock.
+    pub(crate) grid_step: f64,
+    pub(crate) grid: Clock,
+    pub(crate) clocks: Vec<Clock>,
+    /// Times closer than this are the same major step.
+    pub(crate) tol: f64,
+}
+
+impl Timing {
+    pub(crate) fn new(model: &Model, stop: f64) -> Self {
+        let method = match model.sim.method {
+            m if model.sim.default_max_step => m.with_max_step(m.default_max_step(stop)),
+            m => m,
+        };
+        let grid_step = if method.is_adaptive() { 0.0 } else { method.max_step() };
+        let clocks: Vec<Clock> = model.clocks.iter().map(|&(period, offset)| Clock::new(period, offset)).collect();
+        let smallest = clocks
+            .iter()
+            .map(|c| c.grid.step)
+            .chain([stop, method.max_step()])
+            .filter(|&p| p > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        Timing { method, grid_step, grid: Clock::new(grid_step, 0.0), clocks, tol: 1e-9 * smallest }
+    }
+}
+
+/// Takes the clocks whose next hit is (within `tol`) at `t`; returns
+/// whether any was.
+pub(crate) fn mark_hits(clocks: &mut [Clock], t: f64, tol: f64) -> bool {
+    let mut any = false;
+    for c in clocks {
+        c.hit = c.next <= t + tol;
+        if c.hit {
+            c.set_tick(c.tick + 1);
+            any = true;
+        }
+    }
+    any
 }
 
 /// Counters for the run report.
@@ -144,22 +200,7 @@ impl Simulator {
     /// `None`) and computes the initial states.
     pub fn new(model: Model, stop: Option<f64>) -> Self {
         let stop = stop.unwrap_or(model.sim.stop);
-        let method = match model.sim.method {
-            m if model.sim.default_max_step => m.with_max_step(m.default_max_step(stop)),
-            m => m,
-        };
-        let grid_step = if method.is_adaptive() { 0.0 } else { method.max_step() };
-        let clocks: Vec<Clock> = model
-            .clocks
-            .iter()
-            .map(|&(period, offset)| Clock { grid: Grid::new(period), offset, tick: 0, next: offset, hit: false })
-            .collect();
-        let smallest = clocks
-            .iter()
-            .map(|c| c.grid.step)
-            .chain([stop, method.max_step()])
-            .filter(|&p| p > 0.0)
-            .fold(f64::INFINITY, f64::min);
+        let Timing { method, grid_step, grid, clocks, tol } = Timing::new(&model, stop);
         let continuous: Vec<usize> =
             (0..model.meta.len()).filter(|&i| model.meta[i].rate == Rate::Continuous).collect();
         let watch = Watch::new(&model, &continuous, model.sim.zero_crossing);
@@ -182,10 +223,10 @@ impl Simulator {
             integ: Integrator::new(method, model.between.n_integrated),
             clocks,
             grid_step,
-            grid: Clock { grid: Grid::new(grid_step), offset: 0.0, tick: 0, next: 0.0, hit: false },
+            grid,
             t: 0.0,
             stop,
-            tol: 1e-9 * smallest,
+            tol,
             first: true,
             next_event: f64::INFINITY,
             major_steps: 0,
@@ -293,15 +334,7 @@ impl Simulator {
 
     /// Takes clocks whose next hit is (within tolerance) now.
     fn mark_hits(&mut self) -> bool {
-        let mut any = false;
-        for c in &mut self.clocks {
-            c.hit = c.next <= self.t + self.tol;
-            if c.hit {
-                c.set_tick(c.tick + 1);
-                any = true;
-            }
-        }
-        any
+        mark_hits(&mut self.clocks, self.t, self.tol)
     }
 
     /// Runs `output` of every block due now, in execution order:
@@ -368,26 +401,12 @@ impl Simulator {
     /// The error for block `owner` having produced `value` (not finite) as
     /// `what`, with its inputs as they are now (block `?` when unknown).
     fn non_finite(&self, t: f64, owner: Option<usize>, what: String, value: f64) -> SimError {
-        let Some(i) = owner else {
-            return SimError::NonFinite { t, block: "?".into(), what, value, inputs: vec![] };
-        };
-        let meta = &self.model.meta[i];
-        let mut inputs = Vec::new();
-        for (name, p) in meta.input_names.iter().zip(meta.inputs.clone()) {
-            let port = self.model.in_ports[p];
-            let values = &self.signals[port.offset..port.offset + port.width];
-            match values {
-                [v] => inputs.push((name.clone(), *v)),
-                _ => inputs.extend(values.iter().enumerate().map(|(k, v)| (format!("{name}[{k}]"), *v))),
-            }
-        }
-        SimError::NonFinite { t, block: meta.name.clone(), what, value, inputs }
+        non_finite(&self.model.meta, &self.model.in_ports, &self.signals, t, owner, what, value)
     }
 
     /// The block owning state `k`, and the state's index within the block.
     fn state_owner(&self, k: usize) -> Option<(usize, usize)> {
-        let i = self.model.meta.iter().position(|m| m.states.contains(&k))?;
-        Some((i, k - self.model.meta[i].states.start))
+        state_owner(&self.model.meta, k)
     }
 
     /// Blocks with zero crossings may reset their states at a major step;
@@ -464,9 +483,7 @@ impl Simulator {
             }
         }
         if self.grid_step > 0.0 {
-            while self.grid.next <= self.t + self.tol {
-                self.grid.set_tick(self.grid.tick + 1);
-            }
+            self.grid.pass(self.t, self.tol);
         }
         let mut clamped = false;
         for &i in &self.integrated {
@@ -567,7 +584,8 @@ fn due(rate: Rate, clocks: &[Clock], constant_too: bool) -> bool {
 
 /// Whether every value is finite, without a branch per value: 0·v is 0
 /// for finite v and NaN for ±inf and NaN.
-fn all_finite(values: &[f64]) -> bool {
+#[inline]
+pub(crate) fn all_finite(values: &[f64]) -> bool {
     let mut acc = [0.0f64; 4];
     let chunks = values.chunks_exact(4);
     let tail = chunks.remainder().iter().fold(0.0, |a, &v| a + 0.0 * v);
@@ -577,6 +595,40 @@ fn all_finite(values: &[f64]) -> bool {
         }
     }
     (acc[0] + acc[1] + acc[2] + acc[3] + tail) == 0.0
+}
+
+/// The error for block `owner` (index into `meta`) having produced `value`
+/// (not finite) as `what`, with its inputs as they are in `signals` (block
+/// `?` when unknown).
+pub(crate) fn non_finite(
+    meta: &[crate::compile::BlockMeta],
+    in_ports: &[Port],
+    signals: &[f64],
+    t: f64,
+    owner: Option<usize>,
+    what: String,
+    value: f64,
+) -> SimError {
+    let Some(i) = owner else {
+        return SimError::NonFinite { t, block: "?".into(), what, value, inputs: vec![] };
+    };
+    let meta = &meta[i];
+    let mut inputs = Vec::new();
+    for (name, p) in meta.input_names.iter().zip(meta.inputs.clone()) {
+        let port = in_ports[p];
+        let values = &signals[port.offset..port.offset + port.width];
+        match values {
+            [v] => inputs.push((name.clone(), *v)),
+            _ => inputs.extend(values.iter().enumerate().map(|(k, v)| (format!("{name}[{k}]"), *v))),
+        }
+    }
+    SimError::NonFinite { t, block: meta.name.clone(), what, value, inputs }
+}
+
+/// The block owning state `k`, and the state's index within the block.
+pub(crate) fn state_owner(meta: &[crate::compile::BlockMeta], k: usize) -> Option<(usize, usize)> {
+    let i = meta.iter().position(|m| m.states.contains(&k))?;
+    Some((i, k - meta[i].states.start))
 }
 
 pub(crate) fn io_for<'a>(

@@ -28,20 +28,20 @@ impl Visit {
 /// Worth it for the small blocks (sums, gains, demuxes) that make up much
 /// of a diagram: a call through a view costs several times their arithmetic.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Inline {
-    kernel: Kernel,
-    u0: usize,
-    u1: usize,
-    y: usize,
+pub(crate) struct Inline {
+    pub(crate) kernel: Kernel,
+    pub(crate) u0: usize,
+    pub(crate) u1: usize,
+    pub(crate) y: usize,
     /// Elements copied (`Kernel::Copy`).
-    width: usize,
+    pub(crate) width: usize,
 }
 
 impl Inline {
     /// Block `i`'s kernel, when it has one and its ports suit it: all
     /// scalar for a scalar kernel; for `Copy` one input, as wide as the
     /// outputs, which lie end to end.
-    pub(super) fn of(model: &Model, i: usize) -> Option<Inline> {
+    pub(crate) fn of(model: &Model, i: usize) -> Option<Inline> {
         let kernel = model.blocks[i].kernel()?;
         let slot = &model.slots[i];
         let (ins, outs) = (&model.in_ports[slot.inputs.clone()], &model.out_ports[slot.outputs.clone()]);
