@@ -158,6 +158,7 @@ impl TrackingDifferentiator {
 }
 
 impl Block for TrackingDifferentiator {
+    rust_type!(TrackingDifferentiator);
     fn initialize(&mut self, _x0: &mut [f64]) {
         self.r1 = self.initial;
         self.r2 = 0.0;
@@ -275,6 +276,7 @@ impl Leso {
 }
 
 impl Block for Leso {
+    rust_type!(Leso);
     /// The Euler step as matrices: z⁺ = (I + h·Ac) z + h·Bc [y, u], y = z,
     /// with Ac the observer matrix (shift, minus β in the first column).
     fn discrete_lti(&self) -> Option<ctlgraph_solver::StateSpace> {
@@ -354,6 +356,7 @@ pub struct Lsef {
 }
 
 impl Block for Lsef {
+    rust_type!(Lsef);
     fn updates(&self) -> bool {
         false
     }

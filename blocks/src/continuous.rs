@@ -111,13 +111,14 @@ pub(crate) fn initial_vector(v: &[f64], n: usize) -> Result<Vec<f64>, String> {
 
 /// s/(τs + 1), elementwise.
 #[derive(Clone)]
-struct Derivative {
+pub struct Derivative {
     tau: f64,
     initial_input: f64,
     width: usize,
 }
 
 impl Block for Derivative {
+    rust_type!(Derivative);
     fn updates(&self) -> bool {
         false
     }
@@ -193,6 +194,7 @@ impl Lti {
 }
 
 impl Block for Lti {
+    rust_type!(Lti);
     fn updates(&self) -> bool {
         false
     }

@@ -256,6 +256,7 @@ impl TransportDelay {
 }
 
 impl Block for TransportDelay {
+    rust_type!(TransportDelay);
     fn not_linearizable(&self) -> Option<&'static str> {
         Some("a transport delay e^(-sτ) has no finite-dimensional linear model (read the loop's delay margin instead)")
     }
@@ -344,6 +345,7 @@ pub struct Delay {
 }
 
 impl Block for Delay {
+    rust_type!(Delay);
     /// A shift register of `samples` entries per element: y = oldest,
     /// each update shifts by one and takes u (state k·w + j: element j,
     /// k samples before the output; for samples = 1, z⁺ = u).

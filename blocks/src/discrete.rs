@@ -66,6 +66,7 @@ impl DiscreteLti {
 }
 
 impl Block for DiscreteLti {
+    rust_type!(DiscreteLti);
     fn discrete_lti(&self) -> Option<StateSpace> {
         Some(self.ss.clone())
     }
@@ -96,9 +97,10 @@ fn build_unit_delay(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 #[derive(Clone)]
-struct Hold;
+pub struct Hold;
 
 impl Block for Hold {
+    rust_type!(Hold);
     fn updates(&self) -> bool {
         false
     }

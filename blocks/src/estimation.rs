@@ -96,6 +96,7 @@ impl Rls {
 }
 
 impl Block for Rls {
+    rust_type!(Rls);
     fn initialize(&mut self, _x0: &mut [f64]) {
         self.reset();
     }

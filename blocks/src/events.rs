@@ -110,6 +110,7 @@ impl Relay {
 }
 
 impl Block for Relay {
+    rust_type!(Relay);
     fn initialize(&mut self, _x0: &mut [f64]) {
         self.on = self.initial_on;
         self.next = self.initial_on;
@@ -173,6 +174,7 @@ pub struct HitCrossing {
 }
 
 impl Block for HitCrossing {
+    rust_type!(HitCrossing);
     fn initialize(&mut self, _x0: &mut [f64]) {
         self.last = f64::NAN;
         self.current = f64::NAN;

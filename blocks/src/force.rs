@@ -170,13 +170,14 @@ pub const TYPES: &[BlockType] = &[
 
 /// m x'' + b x' + k x = e, continuous.
 #[derive(Clone)]
-struct Impedance {
+pub struct Impedance {
     m: f64,
     b: f64,
     k: f64,
 }
 
 impl Block for Impedance {
+    rust_type!(Impedance);
     fn num_states(&self) -> usize {
         2
     }
@@ -193,12 +194,13 @@ impl Block for Impedance {
 /// A discrete filter whose state stands still and output holds while its
 /// `hold` input (port 1) is nonzero.
 #[derive(Clone)]
-struct Holdable {
+pub struct Holdable {
     filter: DiscreteLti,
     last: f64,
 }
 
 impl Block for Holdable {
+    rust_type!(Holdable);
     /// The filter's model while not held (the hold input enters nowhere).
     fn discrete_lti(&self) -> Option<ctlgraph_solver::StateSpace> {
         let ss = self.filter.discrete_lti()?;
@@ -273,13 +275,14 @@ pub fn normal_force(fx: f64, fz: f64, climbing: bool, mu_u: f64, mu_d: f64) -> f
 }
 
 #[derive(Clone)]
-struct NormalForce {
+pub struct NormalForce {
     mu_u: f64,
     mu_d: f64,
     by_slope: bool,
 }
 
 impl Block for NormalForce {
+    rust_type!(NormalForce);
     fn updates(&self) -> bool {
         false
     }
@@ -375,6 +378,7 @@ impl Contact {
 }
 
 impl Block for Contact {
+    rust_type!(Contact);
     fn initialize(&mut self, _x0: &mut [f64]) {
         self.pressing = false;
     }
@@ -449,7 +453,7 @@ fn build_contact(p: &mut Params) -> Result<Built, Diagnostic> {
 
 /// Je x'' + Be x' = u − d.
 #[derive(Clone)]
-struct FeedDrive {
+pub struct FeedDrive {
     je: f64,
     be: f64,
     x0: [f64; 2],
@@ -457,6 +461,7 @@ struct FeedDrive {
 }
 
 impl Block for FeedDrive {
+    rust_type!(FeedDrive);
     fn num_states(&self) -> usize {
         2
     }
@@ -495,7 +500,7 @@ fn build_feed_drive(p: &mut Params) -> Result<Built, Diagnostic> {
 
 /// p'' = ωn²(u − p) − 2ζωn p'.
 #[derive(Clone)]
-struct ReferenceFilter {
+pub struct ReferenceFilter {
     omega: f64,
     zeta: f64,
     initial: f64,
@@ -508,6 +513,7 @@ impl ReferenceFilter {
 }
 
 impl Block for ReferenceFilter {
+    rust_type!(ReferenceFilter);
     fn num_states(&self) -> usize {
         2
     }

@@ -109,6 +109,7 @@ impl Integrator {
 }
 
 impl Block for Integrator {
+    rust_type!(Integrator);
     fn updates(&self) -> bool {
         false
     }

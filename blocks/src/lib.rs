@@ -5,6 +5,16 @@
 
 use ctlgraph_core::registry::{ParamDoc, PortDoc, Registry};
 
+/// A block's [`Block::rust_type`](ctlgraph_core::Block::rust_type): its
+/// path as generated code names it, from the module that defines it.
+macro_rules! rust_type {
+    ($ty:ident) => {
+        fn rust_type(&self) -> Option<&'static str> {
+            Some(concat!(module_path!(), "::", stringify!($ty)))
+        }
+    };
+}
+
 pub mod adrc;
 #[cfg(test)]
 mod block_tests;

@@ -163,7 +163,7 @@ fn build_sign(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 #[derive(Clone)]
-enum Gain {
+pub enum Gain {
     Elementwise(Vec<f64>),
     /// Row-major, `rows × cols`.
     Matrix {
@@ -173,6 +173,7 @@ enum Gain {
 }
 
 impl Block for Gain {
+    rust_type!(Gain);
     fn updates(&self) -> bool {
         false
     }
@@ -240,11 +241,12 @@ fn build_gain(p: &mut Params) -> Result<Built, Diagnostic> {
 
 /// Σ sᵢ uᵢ elementwise, or the sum of one input's elements.
 #[derive(Clone)]
-struct Sum {
+pub struct Sum {
     signs: Vec<f64>,
 }
 
 impl Block for Sum {
+    rust_type!(Sum);
     fn updates(&self) -> bool {
         false
     }
@@ -306,11 +308,12 @@ fn build_sum(p: &mut Params) -> Result<Built, Diagnostic> {
 
 /// u1 ∘ u2 ∘ … with ∘ ∈ {·, /}.
 #[derive(Clone)]
-struct Product {
+pub struct Product {
     divide: Vec<bool>,
 }
 
 impl Block for Product {
+    rust_type!(Product);
     fn updates(&self) -> bool {
         false
     }
@@ -350,7 +353,7 @@ fn build_divide(p: &mut Params) -> Result<Built, Diagnostic> {
 
 /// Elementwise extremum over inputs, or over the elements of one input.
 #[derive(Clone)]
-struct Extremum {
+pub struct Extremum {
     max: bool,
     inputs: usize,
     /// Multi-input form: the selected input per element (the mode).
@@ -358,6 +361,7 @@ struct Extremum {
 }
 
 impl Block for Extremum {
+    rust_type!(Extremum);
     fn updates(&self) -> bool {
         false
     }
@@ -432,12 +436,13 @@ fn build_max(p: &mut Params) -> Result<Built, Diagnostic> {
 
 /// A compiled expression over `[u1, …, un, t]`.
 #[derive(Clone)]
-struct Fcn {
+pub struct Fcn {
     expr: Expr,
     vars: Vec<f64>,
 }
 
 impl Block for Fcn {
+    rust_type!(Fcn);
     fn updates(&self) -> bool {
         false
     }

@@ -167,7 +167,7 @@ impl Cutter {
 /// The block: the cutter and, per tooth, whether it is in the cut and
 /// whether its chip is positive (the mode, frozen in minor steps).
 #[derive(Clone)]
-struct MillingForce {
+pub struct MillingForce {
     cutter: Cutter,
     zero_crossing: bool,
     tooth_outputs: bool,
@@ -185,6 +185,7 @@ impl MillingForce {
 }
 
 impl Block for MillingForce {
+    rust_type!(MillingForce);
     fn updates(&self) -> bool {
         false
     }

@@ -56,13 +56,14 @@ const BSPLINE_PATH: BlockType = BlockType {
 };
 
 #[derive(Clone)]
-struct BSplinePath {
+pub struct BSplinePath {
     path: bspline::BSpline,
     axis: Option<bspline::BSpline>,
     out: Vec<f64>,
 }
 
 impl Block for BSplinePath {
+    rust_type!(BSplinePath);
     fn updates(&self) -> bool {
         false
     }
@@ -204,11 +205,12 @@ const MIRROR_OFFSET: BlockType = BlockType {
 };
 
 #[derive(Clone)]
-struct MirrorOffset {
+pub struct MirrorOffset {
     offset: f64,
 }
 
 impl Block for MirrorOffset {
+    rust_type!(MirrorOffset);
     fn updates(&self) -> bool {
         false
     }
@@ -379,7 +381,7 @@ fn advance([s, f, a]: [f64; 3], jerk: f64, dt: f64) -> [f64; 3] {
 }
 
 #[derive(Clone)]
-struct SCurveBlock {
+pub struct SCurveBlock {
     profile: SCurve,
     start: f64,
     /// Absolute event times.
@@ -390,6 +392,7 @@ struct SCurveBlock {
 }
 
 impl Block for SCurveBlock {
+    rust_type!(SCurveBlock);
     fn updates(&self) -> bool {
         false
     }

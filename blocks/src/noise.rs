@@ -110,7 +110,7 @@ enum Law {
 
 /// Draws at each sample hit (in `update`) and holds the value.
 #[derive(Clone)]
-struct Noise {
+pub struct Noise {
     law: Law,
     stream: Stream,
     value: f64,
@@ -126,6 +126,7 @@ impl Noise {
 }
 
 impl Block for Noise {
+    rust_type!(Noise);
     fn initialize(&mut self, _x0: &mut [f64]) {
         self.stream.restart();
         self.value = self.draw();

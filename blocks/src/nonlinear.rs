@@ -105,6 +105,7 @@ impl Piecewise {
 }
 
 impl Block for Piecewise {
+    rust_type!(Piecewise);
     fn updates(&self) -> bool {
         false
     }
@@ -191,6 +192,7 @@ impl RateLimiter {
 }
 
 impl Block for RateLimiter {
+    rust_type!(RateLimiter);
     fn set_width(&mut self, width: usize) -> Result<(), String> {
         self.last = vec![self.initial; width];
         self.current = vec![self.initial; width];

@@ -109,6 +109,7 @@ impl ContinuousPid {
 }
 
 impl Block for ContinuousPid {
+    rust_type!(ContinuousPid);
     fn num_states(&self) -> usize {
         2
     }
@@ -143,7 +144,7 @@ impl Block for ContinuousPid {
 
 /// Discrete PID: forward-Euler integral, backward-Euler derivative filter.
 #[derive(Clone)]
-struct DiscretePid {
+pub struct DiscretePid {
     law: PidLaw,
     period: f64,
     initial: f64,
@@ -164,6 +165,7 @@ impl DiscretePid {
 }
 
 impl Block for DiscretePid {
+    rust_type!(DiscretePid);
     /// Unsaturated, fixed gains: state [integral, filter], input e.
     /// With a = 1/(1 + N·T): filter⁺ = a·filter + (1 − a)·e,
     /// integral⁺ = integral + T·ki·e, u = integral − kd·N·a·filter + (kp + kd·N·a)·e.

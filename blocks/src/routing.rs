@@ -136,9 +136,10 @@ fn widths(p: &mut Params, count_key: &str) -> Result<Vec<usize>, Diagnostic> {
 
 /// Concatenates the inputs in port order.
 #[derive(Clone)]
-struct Concat;
+pub struct Concat;
 
 impl Block for Concat {
+    rust_type!(Concat);
     fn updates(&self) -> bool {
         false
     }
@@ -164,9 +165,10 @@ fn build_mux(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 #[derive(Clone)]
-struct Split(Vec<usize>);
+pub struct Split(Vec<usize>);
 
 impl Block for Split {
+    rust_type!(Split);
     fn updates(&self) -> bool {
         false
     }
@@ -199,9 +201,10 @@ fn build_demux(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 #[derive(Clone)]
-struct Selector(Vec<usize>);
+pub struct Selector(Vec<usize>);
 
 impl Block for Selector {
+    rust_type!(Selector);
     fn updates(&self) -> bool {
         false
     }
@@ -241,7 +244,7 @@ enum Criterion {
 }
 
 #[derive(Clone)]
-struct Switch {
+pub struct Switch {
     threshold: f64,
     criterion: Criterion,
     /// The mode: whether u1 passes.
@@ -249,6 +252,7 @@ struct Switch {
 }
 
 impl Block for Switch {
+    rust_type!(Switch);
     fn updates(&self) -> bool {
         false
     }

@@ -109,6 +109,7 @@ impl SlidingMode {
 }
 
 impl Block for SlidingMode {
+    rust_type!(SlidingMode);
     fn num_states(&self) -> usize {
         if self.period > 0.0 { 0 } else { 1 }
     }
@@ -168,7 +169,7 @@ fn build_sliding_mode(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 #[derive(Clone)]
-struct Smc {
+pub struct Smc {
     lambda: f64,
     k: f64,
     phi: f64,
@@ -176,6 +177,7 @@ struct Smc {
 }
 
 impl Block for Smc {
+    rust_type!(Smc);
     fn output(&mut self, io: &mut Io) {
         let s = self.lambda * io.u(0) + io.u(1);
         let switching = if self.phi > 0.0 { (s / self.phi).clamp(-1.0, 1.0) } else { crate::math::sign(s) };

@@ -131,13 +131,14 @@ fn scalar_source<F: Fn(&Io) -> f64 + Send + Clone + 'static>(
 
 /// Zero outside an active window [on, off); the window's edges are events.
 #[derive(Clone)]
-struct Windowed {
+pub struct Windowed {
     inner: Box<dyn Block>,
     on: f64,
     off: f64,
 }
 
 impl Block for Windowed {
+    rust_type!(Windowed);
     fn updates(&self) -> bool {
         self.inner.updates()
     }
@@ -253,7 +254,7 @@ fn build_pulse(p: &mut Params) -> Result<Built, Diagnostic> {
 /// expressions `next_event` hands the simulator, so `reached` compares equal
 /// floating-point values at the edges.
 #[derive(Clone)]
-struct Pulse {
+pub struct Pulse {
     amplitude: f64,
     period: f64,
     high: f64,
@@ -267,6 +268,7 @@ impl Pulse {
 }
 
 impl Block for Pulse {
+    rust_type!(Pulse);
     fn updates(&self) -> bool {
         false
     }

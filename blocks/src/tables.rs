@@ -113,9 +113,10 @@ impl Table {
 }
 
 #[derive(Clone)]
-struct Lookup(Table);
+pub struct Lookup(Table);
 
 impl Block for Lookup {
+    rust_type!(Lookup);
     fn updates(&self) -> bool {
         false
     }
@@ -144,9 +145,10 @@ fn build_lookup(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 #[derive(Clone)]
-struct Series(Table);
+pub struct Series(Table);
 
 impl Block for Series {
+    rust_type!(Series);
     fn updates(&self) -> bool {
         false
     }

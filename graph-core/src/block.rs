@@ -478,6 +478,15 @@ pub trait Block: std::any::Any + Send + dyn_clone::DynClone {
         None
     }
 
+    /// The block's Rust type as generated code names it
+    /// (`ctlgraph_blocks::pid::ContinuousPid`), for a generated step
+    /// ([`crate::codegen`]) that calls the block without dynamic dispatch.
+    /// `None` (the default) keeps the call dynamic: right for types that
+    /// cannot be named, such as blocks built around a closure.
+    fn rust_type(&self) -> Option<&'static str> {
+        None
+    }
+
     /// Runs at every major step after all outputs, for continuous blocks
     /// that [`Block::needs_major_step`]: the block may switch modes that
     /// depend on inputs without feedthrough, and reset its continuous states

@@ -55,13 +55,14 @@ pub const TYPES: &[BlockType] = &[BlockType {
 }];
 
 #[derive(Clone)]
-struct FuzzyBlock {
+pub struct FuzzyBlock {
     fis: Fis,
     x: Vec<f64>,
     y: Vec<f64>,
 }
 
 impl Block for FuzzyBlock {
+    rust_type!(FuzzyBlock);
     fn updates(&self) -> bool {
         false
     }

@@ -34,7 +34,7 @@ pub const PATH_INTERPOLATOR: BlockType = BlockType {
 };
 
 #[derive(Clone)]
-struct PathInterpolator {
+pub struct PathInterpolator {
     tc: f64,
     initial: f64,
     u: f64,
@@ -54,6 +54,7 @@ pub fn taylor_step(u: f64, f: f64, a: f64, d1: &[f64], d2: &[f64], tc: f64) -> f
 }
 
 impl Block for PathInterpolator {
+    rust_type!(PathInterpolator);
     fn initialize(&mut self, _x0: &mut [f64]) {
         self.u = self.initial;
     }

@@ -237,7 +237,7 @@ fn norm(v: &[f64]) -> f64 {
 }
 
 #[derive(Clone)]
-struct MirrorFeedPlan {
+pub struct MirrorFeedPlan {
     plan: SyncPlan,
     tc: f64,
     /// The sample-time offset plus `start`: the time of the plan's period 0.
@@ -245,6 +245,7 @@ struct MirrorFeedPlan {
 }
 
 impl Block for MirrorFeedPlan {
+    rust_type!(MirrorFeedPlan);
     fn updates(&self) -> bool {
         false
     }
