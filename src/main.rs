@@ -147,6 +147,20 @@ enum Command {
         #[arg(long, value_name = "FILE.html")]
         html: PathBuf,
     },
+    /// Write the graph's step as Rust that calls its blocks directly (docs/compiled-step.md).
+    #[command(after_help = "Example:\n  ctlgraph codegen graphs/fladrc/ladrc.yaml --out src/ladrc_step.rs\n\n\
+                      The module defines `Step`; run it with `ctlgraph_core::codegen::Compiled::<Step>::new(&model, None)`.\n\
+                      Accepted: fixed-step solvers (euler, heun, rk4), no zero crossings, no top-level inports.")]
+    Codegen {
+        /// The graph file (YAML).
+        graph: PathBuf,
+        /// Where to write the Rust module (standard output when omitted).
+        #[arg(long, value_name = "FILE.rs")]
+        out: Option<PathBuf>,
+        /// Override a graph parameter (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        sets: Vec<String>,
+    },
     /// Print the graph as Graphviz dot.
     #[command(
         after_help = "Example (needs Graphviz):\n  ctlgraph dot graphs/tutorial/pid_loop.yaml | dot -Tsvg > pid_loop.svg"
@@ -242,6 +256,7 @@ fn main() -> ExitCode {
         Command::Linearize { select, out } => analysis_cmd::linearize(select, out.as_deref()),
         Command::Bode { select, grid } => analysis_cmd::bode(select, grid),
         Command::Poles { select } => analysis_cmd::poles(select),
+        Command::Codegen { graph, out, sets } => codegen(&graph, out.as_deref(), &sets),
         Command::Dot { graph, sets } => compile(&graph, &sets).map(|m| print!("{}", ctlgraph::dot::to_dot(&m))),
         Command::Diagram { graph, svg, expand, sets } => diagram(&graph, &svg, expand, &sets),
         Command::Report { csv, json, html } => report_cmd::report(&csv, &json, &html),
@@ -272,6 +287,20 @@ fn main() -> ExitCode {
 fn compile(graph: &Path, sets: &[String]) -> Result<Model, Failure> {
     let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
     Ok(ctlgraph::compile_file(graph, &sets)?)
+}
+
+fn codegen(graph: &Path, out: Option<&Path>, sets: &[String]) -> Result<(), Failure> {
+    let model = compile(graph, sets)?;
+    let code = ctlgraph_core::codegen::generate(&model)
+        .map_err(|why| Failure::Run(format!("{}: cannot generate a step:\n  {}", graph.display(), why.join("\n  "))))?;
+    match out {
+        Some(path) => ctlgraph::record::write_atomic(path, code.as_bytes())
+            .map_err(|e| Failure::Run(format!("{}: {e}", path.display()))),
+        None => {
+            print!("{code}");
+            Ok(())
+        }
+    }
 }
 
 fn diagram(graph: &Path, svg: &Path, expand: bool, sets: &[String]) -> Result<(), Failure> {

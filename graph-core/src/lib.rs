@@ -8,6 +8,7 @@
 
 pub mod block;
 pub mod checks;
+pub mod codegen;
 pub mod compile;
 pub mod diag;
 pub mod expr;

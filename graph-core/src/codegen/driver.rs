@@ -1,0 +1,296 @@
+//! Runs a generated step: the simulator's time keeping (the fixed-step
+//! grid, clocks counted in ticks, block events, the exact-ZOH hold) around
+//! the generated sweeps, so both compute the same numbers to the bit.
+
+use crate::block::{Kernel, Port};
+use crate::compile::{BlockMeta, Model, signal_owner};
+use crate::sim::{self, Clock, RunStats, SimError, Timing};
+use ctlgraph_solver::{Integrator, OdeSystem, SolverError, Zoh};
+
+/// What `ctlgraph codegen` writes for a graph: its sweeps unrolled over
+/// the graph's blocks. Implemented by generated code only; the methods are
+/// the simulator's steps (see [`crate::block`]), called by [`Compiled`].
+pub trait GeneratedStep: Sized {
+    /// The structure the code was generated for ([`super::fingerprint`]).
+    const FINGERPRINT: u64;
+    /// Takes the blocks, with their parameters, from a model of that structure.
+    fn from_model(model: &Model) -> Result<Self, String>;
+    fn signals(&self) -> &[f64];
+    /// Whether every signal is finite ([`all_finite`] on the buffer, its
+    /// length known to the compiler).
+    fn signals_finite(&self) -> bool;
+    fn signals_mut(&mut self) -> &mut [f64];
+    fn initialize(&mut self, x: &mut [f64]);
+    /// The output sweep: `first` on the first pass, `all` when every block
+    /// runs (first pass, block events), `hit` per clock.
+    fn outputs(&mut self, t: f64, x: &[f64], first: bool, all: bool, hit: &[bool]);
+    fn updates(&mut self, t: f64, x: &[f64], hit: &[bool]);
+    /// Latches the held LTI blocks' inputs at a major step.
+    fn hold_inputs(&mut self);
+    /// Advances the held LTI blocks' states by `dt`.
+    fn step_held(&mut self, dt: f64, x: &mut [f64]);
+    /// A solver stage: continuous outputs at (t, x), then derivatives.
+    fn derivatives(&mut self, t: f64, left: bool, x: &[f64], dx: &mut [f64]);
+    fn clamp_states(&mut self, x: &mut [f64]) -> bool;
+    fn next_event(&self, t: f64) -> f64;
+    fn diagnose(&self, block: usize) -> Option<String>;
+}
+
+/// The kernel of the model's block `index`, for generated code reading
+/// its constants.
+pub fn kernel(model: &Model, index: usize) -> Option<Kernel> {
+    model.blocks.get(index)?.kernel()
+}
+
+/// The exact transition of the model's LTI block `index`.
+pub fn transition(model: &Model, index: usize) -> Result<Zoh, String> {
+    let lti = model.blocks.get(index).and_then(|b| b.lti()).ok_or_else(|| mismatch(model, index))?;
+    Ok(Zoh::new(lti.clone()))
+}
+
+/// The error for a block that is not what the generated code expects.
+pub fn mismatch(model: &Model, index: usize) -> String {
+    match model.meta.get(index) {
+        Some(m) => format!("block `{}` ({}) is not the block the generated step was made for", m.name, m.type_name),
+        None => format!("the model has no block {index}, which the generated step expects"),
+    }
+}
+
+/// Whether every value is finite (the simulator's check, one branch for
+/// the whole buffer).
+#[inline]
+pub fn all_finite(values: &[f64]) -> bool {
+    sim::all_finite(values)
+}
+
+/// A zeroed signal buffer of `N` values, on the heap (a large one would
+/// not fit on the stack).
+pub fn zeros<const N: usize>() -> Box<[f64; N]> {
+    let values = vec![0.0; N].into_boxed_slice();
+    values.try_into().unwrap_or_else(|_| unreachable!("a boxed slice of N values is a boxed [f64; N]"))
+}
+
+/// A run of a generated step `G`: like [`crate::Simulator`] for the
+/// graphs [`super::generate`] accepts, with the same results.
+pub struct Compiled<G: GeneratedStep> {
+    step: G,
+    x: Vec<f64>,
+    integ: Integrator,
+    timing: Timing,
+    hit: Vec<bool>,
+    t: f64,
+    stop: f64,
+    first: bool,
+    at_event: bool,
+    next_event: f64,
+    n_integrated: usize,
+    major_steps: u64,
+    /// For naming a block in an error.
+    meta: Vec<BlockMeta>,
+    in_ports: Vec<Port>,
+    out_ports: Vec<Port>,
+}
+
+/// The solver stage the integrator sees.
+struct Stage<'a, G> {
+    step: &'a mut G,
+    t_end: f64,
+}
+
+impl<G: GeneratedStep> OdeSystem for Stage<'_, G> {
+    fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        self.step.derivatives(t, t >= self.t_end, x, dx);
+    }
+}
+
+impl<G: GeneratedStep> Compiled<G> {
+    /// A run of `model` to `stop` (the graph's own when `None`); `Err` when
+    /// `G` was generated for a model of another structure.
+    pub fn new(model: &Model, stop: Option<f64>) -> Result<Self, String> {
+        match super::fingerprint(model) {
+            Some(f) if f == G::FINGERPRINT => {}
+            Some(_) => {
+                return Err(format!(
+                    "`{}` is not the graph this step was generated for (its blocks, wiring or \
+                     rates differ); regenerate it with `ctlgraph codegen`",
+                    model.file
+                ));
+            }
+            None => return Err(format!("`{}`: {}", model.file, super::refusals(model).join("; "))),
+        }
+        let stop = stop.unwrap_or(model.sim.stop);
+        let timing = Timing::new(model, stop);
+        let mut run = Compiled {
+            step: G::from_model(model)?,
+            x: vec![0.0; model.n_states],
+            integ: Integrator::new(timing.method, model.between.n_integrated),
+            hit: vec![false; timing.clocks.len()],
+            timing,
+            t: 0.0,
+            stop,
+            first: true,
+            at_event: true,
+            next_event: f64::INFINITY,
+            n_integrated: model.between.n_integrated,
+            major_steps: 0,
+            meta: model.meta.clone(),
+            in_ports: model.in_ports.clone(),
+            out_ports: model.out_ports.clone(),
+        };
+        run.reset();
+        Ok(run)
+    }
+
+    /// Back to t = 0 with initial states (blocks re-initialised).
+    pub fn reset(&mut self) {
+        self.t = 0.0;
+        self.first = true;
+        self.at_event = true;
+        self.major_steps = 0;
+        self.timing.grid.set_tick(1);
+        self.step.signals_mut().iter_mut().for_each(|s| *s = 0.0);
+        self.step.initialize(&mut self.x);
+        self.timing.clocks.iter_mut().for_each(|c| c.set_tick(0));
+        self.mark_hits();
+        self.next_event = self.step.next_event(self.t);
+        self.integ.reset();
+    }
+
+    pub fn signals(&self) -> &[f64] {
+        self.step.signals()
+    }
+
+    pub fn states(&self) -> &[f64] {
+        &self.x
+    }
+
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
+    pub fn stats(&self) -> RunStats {
+        RunStats { major_steps: self.major_steps, solver: self.integ.stats(), events: 0 }
+    }
+
+    /// Whether the run has reached its stop time.
+    pub fn finished(&self) -> bool {
+        self.t >= self.stop - self.timing.tol && !self.first
+    }
+
+    fn mark_hits(&mut self) -> bool {
+        let any = sim::mark_hits(&mut self.timing.clocks, self.t, self.timing.tol);
+        for (h, c) in self.hit.iter_mut().zip(&self.timing.clocks) {
+            *h = c.hit;
+        }
+        any
+    }
+
+    /// Step (1) of a major step: outputs in execution order, then a check
+    /// that every signal is finite.
+    pub fn outputs(&mut self) -> Result<(), SimError> {
+        let all = self.first || self.at_event;
+        self.step.outputs(self.t, &self.x, self.first, all, &self.hit);
+        self.first = false;
+        if !self.step.signals_finite()
+            && let Some(k) = self.step.signals().iter().position(|v| !v.is_finite())
+        {
+            let owner = signal_owner(&self.meta, &self.out_ports, k);
+            let what = match owner {
+                Some((i, port)) => match self.step.diagnose(i) {
+                    Some(why) => format!("output `{port}`: {why}"),
+                    None => format!("output `{port}`"),
+                },
+                None => "a signal".into(),
+            };
+            let value = self.step.signals()[k];
+            return Err(self.non_finite(owner.map(|(i, _)| i), what, value));
+        }
+        Ok(())
+    }
+
+    fn non_finite(&self, owner: Option<usize>, what: String, value: f64) -> SimError {
+        sim::non_finite(&self.meta, &self.in_ports, self.step.signals(), self.t, owner, what, value)
+    }
+
+    /// Steps (3) and (4): updates, then integration to the next major step.
+    pub fn advance(&mut self) -> Result<(), SimError> {
+        self.step.updates(self.t, &self.x, &self.hit);
+        self.step.hold_inputs();
+        let target = self.next_major_time();
+        let t0 = self.t;
+        let x = &mut self.x[..self.n_integrated];
+        let t_new = if x.is_empty() {
+            target.min(t0 + self.timing.method.max_step())
+        } else {
+            let mut stage = Stage { step: &mut self.step, t_end: target };
+            match self.integ.advance(&mut stage, t0, target, x) {
+                Ok(t) => t,
+                Err(SolverError::NonFinite { t, state: Some(k) }) => {
+                    let owner = sim::state_owner(&self.meta, k);
+                    let what = format!("state {} (inside the solver's step)", owner.map_or(k, |(_, j)| j));
+                    self.t = t;
+                    return Err(self.non_finite(owner.map(|(i, _)| i), what, f64::NAN));
+                }
+                Err(error) => {
+                    let culprit = error.state().and_then(|k| sim::state_owner(&self.meta, k));
+                    let culprit = culprit.map(|(i, j)| (self.meta[i].name.clone(), j));
+                    return Err(SimError::Solver { t: t0, error, culprit });
+                }
+            }
+        };
+        let tol = self.timing.tol;
+        self.t = if (target - t_new).abs() <= tol { target } else { t_new };
+        if self.t > t0 {
+            self.step.step_held(self.t - t0, &mut self.x);
+        }
+        if self.timing.grid_step > 0.0 {
+            self.timing.grid.pass(self.t, tol);
+        }
+        let clamped = self.step.clamp_states(&mut self.x[..self.n_integrated]);
+        let hit = self.mark_hits();
+        let block_event = self.t >= self.next_event - tol;
+        self.at_event = block_event;
+        if block_event {
+            self.next_event = self.step.next_event(self.t);
+        }
+        if hit || block_event || clamped {
+            self.integ.invalidate();
+        }
+        if !sim::all_finite(&self.x)
+            && let Some(k) = self.x.iter().position(|v| !v.is_finite())
+        {
+            let owner = sim::state_owner(&self.meta, k);
+            let what = format!("state {}", owner.map_or(k, |(_, j)| j));
+            return Err(self.non_finite(owner.map(|(i, _)| i), what, self.x[k]));
+        }
+        if self.t <= t0 {
+            return Err(SimError::Stalled { t: t0, block: "?".into() });
+        }
+        self.major_steps += 1;
+        Ok(())
+    }
+
+    /// The earliest of: next clock hit, next grid point, next block event,
+    /// the stop time (an event within tolerance of another wins).
+    fn next_major_time(&self) -> f64 {
+        let timing = &self.timing;
+        let mut next = timing.clocks.iter().map(|c: &Clock| c.next).fold(self.stop, f64::min);
+        if timing.grid_step > 0.0 {
+            next = next.min(timing.grid.next);
+        }
+        if self.next_event <= next + timing.tol { self.next_event } else { next }
+    }
+
+    /// Runs to the stop time, handing the signals to `sink` at every major
+    /// step (including t = 0 and the stop time), as [`crate::Simulator::run`].
+    pub fn run(&mut self, sink: &mut dyn FnMut(f64, &[f64])) -> Result<RunStats, SimError> {
+        loop {
+            self.outputs()?;
+            sink(self.t, self.step.signals());
+            if self.finished() {
+                return Ok(self.stats());
+            }
+            self.advance()?;
+        }
+    }
+}

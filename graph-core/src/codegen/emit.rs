@@ -1,0 +1,336 @@
+//! The generated module's text: the simulator's sweeps (module `sim`)
+//! unrolled over one model's execution order, each block visit a direct
+//! call with constant ports.
+
+use crate::block::{Kernel, Port};
+use crate::compile::{Model, Rate};
+use crate::sim::visit::Inline;
+use std::fmt::Write;
+
+/// Everything after the fingerprint: imports, ports, the `Step` type and
+/// its [`super::GeneratedStep`] implementation.
+pub(super) fn body(model: &Model) -> String {
+    let g = Gen::new(model);
+    let mut out = String::new();
+    out.push_str(
+        "\n#[allow(unused_imports)]\nuse ::ctlgraph_core::block::{Io, Kernel, Port};\n\
+         #[allow(unused_imports)]\nuse ::ctlgraph_core::{Block, Model};\n\
+         #[allow(unused_imports)]\nuse ::ctlgraph_core::codegen::{self as cg, Zoh};\n\n",
+    );
+    g.ports(&mut out);
+    g.step_type(&mut out);
+    g.implementation(&mut out);
+    out
+}
+
+/// One block as the generated code sees it.
+struct Visit {
+    index: usize,
+    rate: Rate,
+    /// Runs when the sweep runs every block (first pass, events) only.
+    event_only: bool,
+    inline: Option<Inline>,
+    /// The first of its kernel's constants in `Step::k`.
+    constants: usize,
+    states: std::ops::Range<usize>,
+    updates: bool,
+}
+
+struct Gen<'m> {
+    model: &'m Model,
+    visits: Vec<Visit>,
+    n_constants: usize,
+}
+
+impl<'m> Gen<'m> {
+    fn new(model: &'m Model) -> Self {
+        let mut n_constants = 0;
+        let visits = (0..model.blocks.len())
+            .map(|i| {
+                let inline = Inline::of(model, i);
+                let constants = n_constants;
+                n_constants += inline.map_or(0, |k| constants_of(k.kernel));
+                Visit {
+                    index: i,
+                    rate: model.slots[i].rate,
+                    event_only: model.between.event_only[i],
+                    inline,
+                    constants,
+                    states: model.slots[i].states.clone(),
+                    updates: model.blocks[i].updates(),
+                }
+            })
+            .collect();
+        Gen { model, visits, n_constants }
+    }
+
+    /// `const IN_i` and `OUT_i` for every block called through a view
+    /// (kernels run in place, but may have an update).
+    fn ports(&self, out: &mut String) {
+        let list = |ports: &[Port]| {
+            ports.iter().map(|p| format!("Port {{ offset: {}, width: {} }}", p.offset, p.width)).collect::<Vec<_>>()
+        };
+        for v in self.visits.iter().filter(|v| v.inline.is_none() || v.updates) {
+            let slot = &self.model.slots[v.index];
+            for (kind, ports) in [
+                ("IN", &self.model.in_ports[slot.inputs.clone()]),
+                ("OUT", &self.model.out_ports[slot.outputs.clone()]),
+            ] {
+                let _ =
+                    writeln!(out, "const {kind}_{}: [Port; {}] = [{}];", v.index, ports.len(), list(ports).join(", "));
+            }
+        }
+        out.push('\n');
+    }
+
+    fn step_type(&self, out: &mut String) {
+        let m = self.model;
+        out.push_str("/// The graph's blocks, signals and held transitions.\npub struct Step {\n");
+        let _ = writeln!(out, "    s: Box<[f64; {}]>,", m.signal_len);
+        if self.n_constants > 0 {
+            let _ = writeln!(out, "    /// The kernels' constants.\n    k: [f64; {}],", self.n_constants);
+        }
+        for v in &self.visits {
+            let meta = &m.meta[v.index];
+            let _ = writeln!(out, "    /// `{}` ({})", meta.name.escape_debug(), meta.type_name.escape_debug());
+            let _ = writeln!(out, "    b{}: {},", v.index, field_type(m, v.index));
+        }
+        for (j, &i) in m.between.held.iter().enumerate() {
+            let width = m.in_ports[m.slots[i].inputs.start].width;
+            let _ = writeln!(out, "    z{j}: Zoh,\n    u{j}: [f64; {width}],");
+        }
+        out.push_str("}\n\n");
+    }
+
+    fn implementation(&self, out: &mut String) {
+        out.push_str("impl cg::GeneratedStep for Step {\n    const FINGERPRINT: u64 = FINGERPRINT;\n\n");
+        self.constructor(out);
+        out.push_str(
+            "    fn signals(&self) -> &[f64] {\n        &*self.s\n    }\n\n\
+             \x20   fn signals_finite(&self) -> bool {\n        cg::all_finite(&*self.s)\n    }\n\n\
+             \x20   fn signals_mut(&mut self) -> &mut [f64] {\n        &mut *self.s\n    }\n\n",
+        );
+        self.initialize(out);
+        self.outputs(out);
+        self.updates(out);
+        self.held(out);
+        self.derivatives(out);
+        self.clamp_states(out);
+        self.next_event(out);
+        self.diagnose(out);
+        out.push_str("}\n");
+    }
+
+    fn constructor(&self, out: &mut String) {
+        let m = self.model;
+        out.push_str("    fn from_model(model: &Model) -> Result<Self, String> {\n");
+        if self.n_constants > 0 {
+            let _ = writeln!(out, "        let mut k = [0.0; {}];", self.n_constants);
+        }
+        for v in &self.visits {
+            let Some(inline) = v.inline else { continue };
+            let (pattern, stores) = match inline.kernel {
+                Kernel::Scale(_) => ("Kernel::Scale(a)", format!("k[{}] = a", v.constants)),
+                Kernel::Affine2(..) => {
+                    ("Kernel::Affine2(a, b)", format!("(k[{}], k[{}]) = (a, b)", v.constants, v.constants + 1))
+                }
+                Kernel::Copy => ("Kernel::Copy", "()".into()),
+            };
+            let _ = writeln!(
+                out,
+                "        match cg::kernel(model, {}) {{ Some({pattern}) => {stores}, _ => return Err(cg::mismatch(model, {})) }}",
+                v.index, v.index
+            );
+        }
+        out.push_str("        Ok(Step {\n");
+        out.push_str(if self.n_constants > 0 {
+            "            s: cg::zeros(),\n            k,\n"
+        } else {
+            "            s: cg::zeros(),\n"
+        });
+        for v in &self.visits {
+            let i = v.index;
+            let take = match m.blocks[i].rust_type() {
+                Some(_) => format!("model.block_at({i})"),
+                None => format!("model.block_boxed({i})"),
+            };
+            let _ = writeln!(out, "            b{i}: {take}.ok_or_else(|| cg::mismatch(model, {i}))?,");
+        }
+        for (j, &i) in m.between.held.iter().enumerate() {
+            let width = m.in_ports[m.slots[i].inputs.start].width;
+            let _ = writeln!(out, "            z{j}: cg::transition(model, {i})?,\n            u{j}: [0.0; {width}],");
+        }
+        out.push_str("        })\n    }\n\n");
+    }
+
+    fn initialize(&self, out: &mut String) {
+        out.push_str("    #[allow(unused_variables)]\n    fn initialize(&mut self, x: &mut [f64]) {\n");
+        for v in &self.visits {
+            let states = if v.states.is_empty() { "[]".to_string() } else { format!("x[{}]", range(&v.states)) };
+            let _ = writeln!(out, "        self.b{}.initialize(&mut {states});", v.index);
+        }
+        out.push_str("    }\n\n");
+    }
+
+    /// The simulator's output sweep: constant blocks on the first pass,
+    /// event-only blocks when every block runs, discrete ones at hits.
+    fn outputs(&self, out: &mut String) {
+        out.push_str(
+            "    #[allow(unused_variables)]\n    fn outputs(&mut self, t: f64, x: &[f64], first: bool, all: bool, hit: &[bool]) {\n",
+        );
+        for v in &self.visits {
+            let due = match v.rate {
+                Rate::Constant => "first".to_string(),
+                Rate::Continuous if v.event_only => "all".into(),
+                Rate::Continuous => String::new(),
+                Rate::Discrete(c) if v.event_only => format!("all && hit[{c}]"),
+                Rate::Discrete(c) => format!("hit[{c}]"),
+            };
+            let call = self.output_call(v, "false", false);
+            if due.is_empty() {
+                let _ = writeln!(out, "        {call}");
+            } else {
+                let _ = writeln!(out, "        if {due} {{\n            {call}\n        }}");
+            }
+        }
+        out.push_str("    }\n\n");
+    }
+
+    /// Block `v`'s output: its kernel in place, or a call through a view.
+    fn output_call(&self, v: &Visit, left: &str, minor: bool) -> String {
+        let i = v.index;
+        match v.inline {
+            Some(k) => match k.kernel {
+                Kernel::Copy => format!("self.s.copy_within({}..{}, {});", k.u0, k.u0 + k.width, k.y),
+                Kernel::Scale(_) => {
+                    format!(
+                        "self.s[{}] = Kernel::Scale(self.k[{}]).eval(self.s[{}], self.s[{}]);",
+                        k.y, v.constants, k.u0, k.u1
+                    )
+                }
+                Kernel::Affine2(..) => format!(
+                    "self.s[{}] = Kernel::Affine2(self.k[{}], self.k[{}]).eval(self.s[{}], self.s[{}]);",
+                    k.y,
+                    v.constants,
+                    v.constants + 1,
+                    k.u0,
+                    k.u1
+                ),
+            },
+            None => format!("self.b{i}.output(&mut {});", io(i, left, &v.states, minor)),
+        }
+    }
+
+    /// The update sweep: continuous blocks always, discrete ones at hits.
+    fn updates(&self, out: &mut String) {
+        out.push_str("    #[allow(unused_variables)]\n    fn updates(&mut self, t: f64, x: &[f64], hit: &[bool]) {\n");
+        for v in self.visits.iter().filter(|v| v.updates) {
+            let call = format!("self.b{}.update(&mut {});", v.index, io(v.index, "false", &v.states, false));
+            match v.rate {
+                Rate::Constant => {}
+                Rate::Continuous => {
+                    let _ = writeln!(out, "        {call}");
+                }
+                Rate::Discrete(c) => {
+                    let _ = writeln!(out, "        if hit[{c}] {{\n            {call}\n        }}");
+                }
+            }
+        }
+        out.push_str("    }\n\n");
+    }
+
+    /// Held LTI blocks: their inputs latched at the major step, their
+    /// states advanced by the exact transition.
+    fn held(&self, out: &mut String) {
+        let m = self.model;
+        out.push_str("    fn hold_inputs(&mut self) {\n");
+        for (j, &i) in m.between.held.iter().enumerate() {
+            let p = m.in_ports[m.slots[i].inputs.start];
+            let _ = writeln!(out, "        self.u{j}.copy_from_slice(&self.s[{}..{}]);", p.offset, p.offset + p.width);
+        }
+        out.push_str(
+            "    }\n\n    #[allow(unused_variables)]\n    fn step_held(&mut self, dt: f64, x: &mut [f64]) {\n",
+        );
+        for (j, &i) in m.between.held.iter().enumerate() {
+            let _ = writeln!(out, "        self.z{j}.step(dt, &mut x[{}], &self.u{j});", range(&m.slots[i].states));
+        }
+        out.push_str("    }\n\n");
+    }
+
+    /// A solver stage: the minor step's outputs, then the derivatives.
+    fn derivatives(&self, out: &mut String) {
+        let m = self.model;
+        out.push_str(
+            "    #[allow(unused_variables)]\n    fn derivatives(&mut self, t: f64, left: bool, x: &[f64], dx: &mut [f64]) {\n",
+        );
+        for &i in &m.between.minor {
+            let _ = writeln!(out, "        {}", self.output_call(&self.visits[i], "left", true));
+        }
+        for &i in &m.between.integrated {
+            let states = &self.visits[i].states;
+            let _ = writeln!(
+                out,
+                "        self.b{i}.derivatives(&{}, &mut dx[{}]);",
+                io(i, "left", states, true),
+                range(states)
+            );
+        }
+        out.push_str("    }\n\n");
+    }
+
+    fn clamp_states(&self, out: &mut String) {
+        out.push_str(
+            "    #[allow(unused_variables)]\n    fn clamp_states(&mut self, x: &mut [f64]) -> bool {\n        false",
+        );
+        for &i in &self.model.between.integrated {
+            let _ = write!(out, "\n            | self.b{i}.clamp_states(&mut x[{}])", range(&self.visits[i].states));
+        }
+        out.push_str("\n    }\n\n");
+    }
+
+    /// The earliest block event after `t`, blocks in order as the simulator
+    /// folds them.
+    fn next_event(&self, out: &mut String) {
+        out.push_str("    #[allow(unused_variables)]\n    fn next_event(&self, t: f64) -> f64 {\n        let mut next = f64::INFINITY;\n");
+        for v in &self.visits {
+            let _ = writeln!(out, "        next = f64::min(next, self.b{}.next_event(t));", v.index);
+        }
+        out.push_str("        next\n    }\n\n");
+    }
+
+    fn diagnose(&self, out: &mut String) {
+        out.push_str("    fn diagnose(&self, block: usize) -> Option<String> {\n        match block {\n");
+        for v in &self.visits {
+            let _ = writeln!(out, "            {} => self.b{}.diagnose(),", v.index, v.index);
+        }
+        out.push_str("            _ => None,\n        }\n    }\n");
+    }
+}
+
+/// How many of `Step::k` a kernel's constants take.
+fn constants_of(kernel: Kernel) -> usize {
+    match kernel {
+        Kernel::Scale(_) => 1,
+        Kernel::Affine2(..) => 2,
+        Kernel::Copy => 0,
+    }
+}
+
+/// The field type of block `i`: its own type, or a box called dynamically.
+fn field_type(model: &Model, i: usize) -> String {
+    match model.blocks[i].rust_type() {
+        Some(path) => format!("::{path}"),
+        None => "Box<dyn Block>".into(),
+    }
+}
+
+/// Block `i`'s view at time `t` over states `x[states]` (a stage's when `minor`).
+fn io(i: usize, left: &str, states: &std::ops::Range<usize>, minor: bool) -> String {
+    let x = if states.is_empty() { "&[]".to_string() } else { format!("&x[{}]", range(states)) };
+    let view = format!("Io::new(t, {left}, {x}, &mut *self.s, &IN_{i}, &OUT_{i})");
+    if minor { format!("{view}.in_minor_step(false)") } else { view }
+}
+
+fn range(r: &std::ops::Range<usize>) -> String {
+    format!("{}..{}", r.start, r.end)
+}
