@@ -6,11 +6,15 @@
 //! divides by 20 001 samples. `ladrc_fused_blocks` runs the LADRC graph's
 //! own blocks without the interpreter (computing what it computes, to the
 //! bit): the price of the blocks' code apart from the interpreter's.
+//! `fladrc_compiled` and `ladrc_compiled` run the graphs' generated steps
+//! (`ctlgraph codegen`, built by the `ctlgraph-compiled-graphs` crate).
 //!
 //!     cargo bench --bench fladrc
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use ctlgraph_blocks::fuzzy::fis::{Connective, Fis, Methods, Rule, Variable, uniform_triangles};
+use ctlgraph_compiled_graphs::{graphs_fladrc_fladrc, graphs_fladrc_ladrc};
+use ctlgraph_core::codegen::{Compiled, GeneratedStep};
 use ctlgraph_core::{Model, Simulator};
 use nalgebra::Matrix3;
 use std::hint::black_box;
@@ -238,6 +242,25 @@ fn graph((sim, y): &mut (Simulator, usize)) -> (f64, f64) {
     (sink, last)
 }
 
+fn generated<G: GeneratedStep>(file: &str) -> (Compiled<G>, usize) {
+    let model = model(file, &[]);
+    let y = model.columns.iter().find(|c| c.name == "y").expect("y recorded").offset;
+    (Compiled::new(&model, None).expect("generated for this graph"), y)
+}
+
+/// The generated step's run, as `graph`.
+fn compiled<G: GeneratedStep>((run, y): &mut (Compiled<G>, usize)) -> (f64, f64) {
+    run.reset();
+    let mut sink = 0.0;
+    let mut last = 0.0;
+    run.run(&mut |_, s| {
+        sink += s[*y];
+        last = s[*y];
+    })
+    .expect("runs");
+    (sink, last)
+}
+
 fn bench(c: &mut Criterion) {
     let zoh = plant_zoh();
     let fuzzy = Fuzzy::new(-0.2, 0.2);
@@ -253,6 +276,15 @@ fn bench(c: &mut Criterion) {
     let (by_fused, by_graph) =
         (fused.run(0.0).0, graph(&mut simulator("graphs/fladrc/ladrc.yaml", &[("noise_power", "0")])).0);
     assert_eq!(by_fused, by_graph, "the fused blocks compute what the interpreter does, to the bit");
+    let mut fladrc_compiled = generated::<graphs_fladrc_fladrc::Step>("graphs/fladrc/fladrc.yaml");
+    let mut ladrc_compiled = generated::<graphs_fladrc_ladrc::Step>("graphs/fladrc/ladrc.yaml");
+    for (by_compiled, file) in [
+        (compiled(&mut fladrc_compiled), "graphs/fladrc/fladrc.yaml"),
+        (compiled(&mut ladrc_compiled), "graphs/fladrc/ladrc.yaml"),
+    ] {
+        let by_graph = graph(&mut simulator(file, &[]));
+        assert_eq!(by_compiled, by_graph, "{file}: the generated step computes what the interpreter does, to the bit");
+    }
     let sigma = (1.44e-5f64 / 0.004).sqrt();
     const GROUP: &str = "fladrc_scenario_20k_samples";
     const CRITERION_SAMPLES: usize = 30;
@@ -262,16 +294,20 @@ fn bench(c: &mut Criterion) {
         Paired::new(GROUP, "fladrc_ctlgraph", "fladrc_hand_written"),
         Paired::new(GROUP, "ladrc_ctlgraph", "ladrc_hand_written"),
         Paired::new(GROUP, "ladrc_fused_blocks", "ladrc_hand_written"),
+        Paired::new(GROUP, "fladrc_compiled", "fladrc_hand_written"),
+        Paired::new(GROUP, "ladrc_compiled", "ladrc_hand_written"),
     ];
     let (fladrc_by_hand, ladrc_by_hand) =
         (|| hand_written(Some(&fuzzy), sigma, zoh), || hand_written(None, sigma, zoh));
     let mut sim = simulator("graphs/fladrc/fladrc.yaml", &[]);
     group.bench_function("fladrc_hand_written", |b| b.iter(|| black_box(fladrc_by_hand())));
     group.bench_function("fladrc_ctlgraph", |b| paired[0].run(b, || graph(&mut sim), fladrc_by_hand));
+    group.bench_function("fladrc_compiled", |b| paired[3].run(b, || compiled(&mut fladrc_compiled), fladrc_by_hand));
     let mut sim = simulator("graphs/fladrc/ladrc.yaml", &[]);
     group.bench_function("ladrc_hand_written", |b| b.iter(|| black_box(ladrc_by_hand())));
     group.bench_function("ladrc_ctlgraph", |b| paired[1].run(b, || graph(&mut sim), ladrc_by_hand));
     group.bench_function("ladrc_fused_blocks", |b| paired[2].run(b, || fused.run(sigma), ladrc_by_hand));
+    group.bench_function("ladrc_compiled", |b| paired[4].run(b, || compiled(&mut ladrc_compiled), ladrc_by_hand));
     group.finish();
     paired.iter().for_each(|p| p.save(CRITERION_SAMPLES));
     // The fuzzy system alone, one evaluation, hand-written and as a block.

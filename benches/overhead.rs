@@ -2,12 +2,16 @@
 //! ctlgraph against the same equations written by hand as a plain Rust
 //! loop, integrated by the same RK4 with the same step — and against the
 //! graph's own blocks called without the interpreter (`fused_blocks`),
-//! which splits the overhead into the interpreter's and the blocks' code.
+//! which splits the overhead into the interpreter's and the blocks' code —
+//! and against the graph's generated step (`compiled`, `ctlgraph codegen`,
+//! built by the `ctlgraph-compiled-graphs` crate).
 //!
 //!     cargo bench --bench overhead
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use ctlgraph_compiled_graphs::benches_pid_loop_rk4::Step;
 use ctlgraph_core::Simulator;
+use ctlgraph_core::codegen::Compiled;
 use ctlgraph_solver::{Integrator, Method, OdeSystem};
 use std::hint::black_box;
 
@@ -80,11 +84,24 @@ fn graph(sim: &mut Simulator) -> f64 {
     sink
 }
 
+/// The generated step's run, as `graph`: Σu over the major steps.
+fn compiled(run: &mut Compiled<Step>, ctrl: usize) -> f64 {
+    run.reset();
+    let mut sink = 0.0;
+    for _ in 0..STEPS {
+        let _ = run.outputs();
+        sink += run.signals()[ctrl];
+        let _ = run.advance();
+    }
+    sink
+}
+
 fn bench(c: &mut Criterion) {
     let model = ctlgraph::compile_str(GRAPH, "bench.yaml", &[]).expect("graph compiles");
     let offset = |name: &str| model.columns.iter().find(|c| c.name == name).expect("recorded").offset;
     let (plant, ctrl) = (offset("plant"), offset("ctrl"));
     let mut fused = Fused::new(&model);
+    let mut generated = Compiled::<Step>::new(&model, None).expect("generated for this graph");
     let mut sim = Simulator::new(model, None);
     // Same equations, same integrator: the three agree before they are timed.
     let sum_u = fused_pid::interpreted_sum_u(&mut sim, ctrl);
@@ -92,15 +109,20 @@ fn bench(c: &mut Criterion) {
     let (by_graph, by_hand) = (sim.signals()[plant], hand_written().1);
     assert!((by_graph - by_hand).abs() < 1e-12, "graph {by_graph} vs hand {by_hand}");
     assert_eq!(fused.run(), sum_u, "the fused blocks compute what the interpreter does, to the bit");
+    assert_eq!(compiled(&mut generated, ctrl), sum_u, "the generated step computes what the interpreter does");
     const GROUP: &str = "pid_loop_10k_rk4_steps";
     const CRITERION_SAMPLES: usize = 100;
     let mut group = c.benchmark_group(GROUP);
     group.sample_size(CRITERION_SAMPLES);
-    let mut paired =
-        [Paired::new(GROUP, "ctlgraph", "hand_written"), Paired::new(GROUP, "fused_blocks", "hand_written")];
+    let mut paired = [
+        Paired::new(GROUP, "ctlgraph", "hand_written"),
+        Paired::new(GROUP, "fused_blocks", "hand_written"),
+        Paired::new(GROUP, "compiled", "hand_written"),
+    ];
     group.bench_function("hand_written", |b| b.iter(|| black_box(hand_written().0)));
     group.bench_function("ctlgraph", |b| paired[0].run(b, || graph(&mut sim), hand_written));
     group.bench_function("fused_blocks", |b| paired[1].run(b, || fused.run(), hand_written));
+    group.bench_function("compiled", |b| paired[2].run(b, || compiled(&mut generated, ctrl), hand_written));
     group.finish();
     paired.iter().for_each(|p| p.save(CRITERION_SAMPLES));
 }

@@ -28,6 +28,9 @@ fn tables_divide_the_medians_as_they_say() {
         ("pid_loop_10k_rk4_steps/ctlgraph", 1.5 * ms),
         ("fladrc_scenario_20k_samples/ladrc_fused_blocks", 0.6 * ms),
         ("pid_loop_10k_rk4_steps/fused_blocks", 1.0 * ms),
+        ("fladrc_scenario_20k_samples/fladrc_compiled", 6.0 * ms),
+        ("fladrc_scenario_20k_samples/ladrc_compiled", 0.9 * ms),
+        ("pid_loop_10k_rk4_steps/compiled", 1.25 * ms),
         ("fuzzy_7x7_two_outputs/hand_written", 300.0),
         ("fuzzy_7x7_two_outputs/ctlgraph_fis", 150.0),
         ("chain_compile/10", 0.2 * ms),
@@ -50,6 +53,9 @@ fn tables_divide_the_medians_as_they_say() {
         ("fladrc_scenario_20k_samples/ladrc_fused_blocks", 2.5),
         ("pid_loop_10k_rk4_steps/ctlgraph", 3.25),
         ("pid_loop_10k_rk4_steps/fused_blocks", 2.25),
+        ("fladrc_scenario_20k_samples/fladrc_compiled", 1.25),
+        ("fladrc_scenario_20k_samples/ladrc_compiled", 3.5),
+        ("pid_loop_10k_rk4_steps/compiled", 2.75),
     ] {
         let json = format!(r#"{{"median_ratio":{ratio},"samples":30,"reference":"x"}}"#);
         std::fs::write(root.join(id).join("paired_ratio.json"), json).unwrap();
@@ -64,6 +70,11 @@ fn tables_divide_the_medians_as_they_say() {
     let fused = "| LADRC paper (`fladrc`) | 300 µs (15.0 ns/sample) | 600 µs (30.0 ns/sample) | 2.00× | 2.50× |";
     assert!(text.contains(fused), "{text}");
     assert!(text.contains("| 500 µs (50.0 ns/step) | 1.00 ms (100 ns/step) | 2.00× | 2.25× |"), "{text}");
+    // The generated steps' table: each beside its own hand-written loop.
+    let generated = "| FLADRC paper (`fladrc`) | 5.00 ms (250 ns/sample) | 6.00 ms (300 ns/sample) | 1.20× | 1.25× |";
+    assert!(text.contains(generated), "{text}");
+    assert!(text.contains("| 300 µs (15.0 ns/sample) | 900 µs (45.0 ns/sample) | 3.00× | 3.50× |"), "{text}");
+    assert!(text.contains("| 500 µs (50.0 ns/step) | 1.25 ms (125 ns/step) | 2.50× | 2.75× |"), "{text}");
     // 1 s for 100 steps of 100 000 blocks: 100 ns a block-step.
     assert!(text.contains("| 100 000 | 2.00 s | 3.00 s | 100 |"), "{text}");
     assert!(text.contains("| 10 | 200 µs | 300 µs | 50 |"), "{text}");

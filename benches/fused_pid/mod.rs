@@ -14,15 +14,9 @@ pub const PER_SECOND: f64 = 10_000.0;
 pub const STEP: f64 = 1.0 / PER_SECOND;
 pub const STEPS: usize = 10_000;
 
-pub const GRAPH: &str = "
-simulation: { stop: 100.0, solver: { method: rk4, step: 1.0e-4 } }
-blocks:
-  r:     { type: step, at: 0.0 }
-  err:   { type: sum, signs: \"+-\" }
-  ctrl:  { type: pid, kp: 2.0, ki: 15.0, kd: 0.1, n: 200, lower: -5, upper: 5 }
-  plant: { type: transfer_function, num: [100], den: [1, 6, 100] }
-wires: [r -> err.u1, plant -> err.u2, err -> ctrl, ctrl -> plant]
-";
+/// The graph (`benches/pid_loop_rk4.yaml`; also generated as Rust by the
+/// `ctlgraph-compiled-graphs` crate).
+pub const GRAPH: &str = include_str!("../pid_loop_rk4.yaml");
 
 /// The graph's PID and plant blocks as ctlgraph builds them, taken from
 /// the compiled graph as their concrete types and called in the graph's
