@@ -10,11 +10,13 @@
 //! block's mode must change (module `events`). After `initialize`, stepping
 //! allocates nothing.
 
+mod clock;
 mod error;
 mod events;
 mod host;
 mod minor;
 pub(crate) mod visit;
+pub(crate) use clock::{Clock, Timing, mark_hits};
 pub use error::SimError;
 pub use host::Snapshot;
 
@@ -26,106 +28,6 @@ use events::Watch;
 use minor::Minor;
 use std::ops::Range;
 use visit::Visit;
-
-/// The times k·h of a grid with step h. When h is the reciprocal of a
-/// whole number n (0.01, 1e-4, 0.5), k/n is used: division is correctly
-/// rounded, so 47 steps of 0.01 give 0.47, the double nearest to 47/100,
-/// where 47·0.01 gives 0.47000000000000003.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Grid {
-    step: f64,
-    per_unit: Option<f64>,
-}
-
-impl Grid {
-    fn new(step: f64) -> Self {
-        let n = (1.0 / step).round();
-        let exact = step > 0.0 && (1.0..9e15).contains(&n) && (n * step - 1.0).abs() <= 4.0 * f64::EPSILON;
-        Grid { step, per_unit: exact.then_some(n) }
-    }
-
-    fn time(&self, k: u64) -> f64 {
-        match self.per_unit {
-            Some(n) => k as f64 / n,
-            None => k as f64 * self.step,
-        }
-    }
-}
-
-/// One discrete rate's position on its own time line.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Clock {
-    grid: Grid,
-    offset: f64,
-    /// Index of the next hit not yet taken, and its time (kept, not
-    /// recomputed: the step loop asks for it several times per step).
-    tick: u64,
-    pub(crate) next: f64,
-    pub(crate) hit: bool,
-}
-
-impl Clock {
-    fn new(step: f64, offset: f64) -> Self {
-        Clock { grid: Grid::new(step), offset, tick: 0, next: offset, hit: false }
-    }
-
-    pub(crate) fn set_tick(&mut self, tick: u64) {
-        self.tick = tick;
-        self.next = self.offset + self.grid.time(tick);
-    }
-
-    /// Moves past the hits at or before `t` (within `tol`).
-    pub(crate) fn pass(&mut self, t: f64, tol: f64) {
-        while self.next <= t + tol {
-            self.set_tick(self.tick + 1);
-        }
-    }
-}
-
-/// How a run keeps time, as the simulator and a generated step
-/// ([`crate::codegen::Compiled`]) both keep it.
-#[derive(Clone, Debug)]
-pub(crate) struct Timing {
-    pub(crate) method: Method,
-    /// The fixed-step grid's step (0 for the adaptive methods) and its clock.
-    pub(crate) grid_step: f64,
-    pub(crate) grid: Clock,
-    pub(crate) clocks: Vec<Clock>,
-    /// Times closer than this are the same major step.
-    pub(crate) tol: f64,
-}
-
-impl Timing {
-    pub(crate) fn new(model: &Model, stop: f64) -> Self {
-        let method = match model.sim.method {
-            m if model.sim.default_max_step => m.with_max_step(m.default_max_step(stop)),
-            m => m,
-        };
-        let grid_step = if method.is_adaptive() { 0.0 } else { method.max_step() };
-        let clocks: Vec<Clock> = model.clocks.iter().map(|&(period, offset)| Clock::new(period, offset)).collect();
-        let smallest = clocks
-            .iter()
-            .map(|c| c.grid.step)
-            .chain([stop, method.max_step()])
-            .filter(|&p| p > 0.0)
-            .fold(f64::INFINITY, f64::min);
-        Timing { method, grid_step, grid: Clock::new(grid_step, 0.0), clocks, tol: 1e-9 * smallest }
-    }
-}
-
-/// Takes the clocks whose next hit is (within `tol`) at `t`; returns
-/// whether any was.
-pub(crate) fn mark_hits(clocks: &mut [Clock], t: f64, tol: f64) -> bool {
-    let mut any = false;
-    for c in clocks {
-        c.hit = c.next <= t + tol;
-        if c.hit {
-            c.set_tick(c.tick + 1);
-            any = true;
-        }
-    }
-    any
-}
 
 /// Counters for the run report.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
