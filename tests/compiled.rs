@@ -77,3 +77,16 @@ fn codegen_writes_the_module_or_says_why_it_cannot() {
     assert!(stderr.contains("cannot generate a step") && stderr.contains("fixed-step method"), "{stderr}");
     assert!(!refused.exists());
 }
+
+#[test]
+fn a_generated_step_that_blows_up_says_what_the_interpreter_says() {
+    // An unstable plant (tau < 0): the PI's integrator overflows at t = 1.909.
+    let path = "graphs/tutorial/subsystem.yaml";
+    let sets = [("tau".to_string(), "-0.01".to_string())];
+    let mut sim = Simulator::new(compile_file(Path::new(path), &sets).unwrap(), None);
+    let expected = sim.run(&mut |_, _| {}).unwrap_err().to_string();
+    assert!(expected.contains("block `stiff/i_part`: state 0 is inf"), "{expected}");
+    let (_, trace) = GENERATED.iter().find(|(p, _)| *p == path).unwrap();
+    let got = trace(&compile_file(Path::new(path), &sets).unwrap(), 10_000).unwrap_err();
+    assert_eq!(got, expected);
+}
