@@ -18,8 +18,8 @@ fn main() {
     let (mut modules, mut accepted, mut refused) = (String::new(), String::new(), String::new());
     for file in files {
         let relative = file.strip_prefix(root).expect("under the root").to_string_lossy().replace('\\', "/");
-        // Subsystem libraries and graphs with host inputs do not compile
-        // on their own; they are not runs.
+        // A file that does not compile on its own (a part of a
+        // subsystem) is not a run.
         let Ok(model) = ctlgraph_core::load(&file, &[]).and_then(|flat| ctlgraph_core::compile(&flat, &registry))
         else {
             continue;

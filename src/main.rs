@@ -290,6 +290,9 @@ fn compile(graph: &Path, sets: &[String]) -> Result<Model, Failure> {
 }
 
 fn codegen(graph: &Path, out: Option<&Path>, sets: &[String]) -> Result<(), Failure> {
+    if let Some(path) = out.filter(|p| run_cmd::same_file(p, graph)) {
+        return Err(Diagnostic::plain(format!("--out {}: that is the graph file", path.display())).into());
+    }
     let model = compile(graph, sets)?;
     let code = ctlgraph_core::codegen::generate(&model)
         .map_err(|why| Failure::Run(format!("{}: cannot generate a step:\n  {}", graph.display(), why.join("\n  "))))?;

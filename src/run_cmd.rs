@@ -61,21 +61,25 @@ fn validate(graph: &Path, opts: &RunOptions) -> Result<(), Failure> {
             .into());
     }
     // An output must not overwrite the graph or another output.
-    let same = |a: &Path, b: &Path| a == b || a.canonicalize().ok().is_some_and(|x| b.canonicalize().ok() == Some(x));
     let outputs: Vec<(&str, &Path)> =
         [("--out", opts.out), ("--plot", opts.plot), ("--report", opts.report), ("--html", opts.html)]
             .into_iter()
             .filter_map(|(f, p)| p.map(|p| (f, p)))
             .collect();
     for (i, (flag, p)) in outputs.iter().enumerate() {
-        if same(p, graph) {
+        if same_file(p, graph) {
             return Err(Diagnostic::plain(format!("{flag} {}: that is the graph file", p.display())).into());
         }
-        if let Some((other, _)) = outputs[..i].iter().find(|(_, q)| same(p, q) && p != &Path::new("-")) {
+        if let Some((other, _)) = outputs[..i].iter().find(|(_, q)| same_file(p, q) && p != &Path::new("-")) {
             return Err(Diagnostic::plain(format!("{flag} {}: also given to {other}", p.display())).into());
         }
     }
     Ok(())
+}
+
+/// Whether two paths name one file (as written, or once resolved).
+pub(crate) fn same_file(a: &Path, b: &Path) -> bool {
+    a == b || a.canonicalize().ok().is_some_and(|x| b.canonicalize().ok() == Some(x))
 }
 
 /// The warning for a run expected to take long, if it is.

@@ -76,6 +76,10 @@ fn codegen_writes_the_module_or_says_why_it_cannot() {
     let stderr = text(&out.stderr);
     assert!(stderr.contains("cannot generate a step") && stderr.contains("fixed-step method"), "{stderr}");
     assert!(!refused.exists());
+    // The graph file itself is never the output.
+    let out = ctlgraph(&["codegen", "graphs/fladrc/ladrc.yaml", "--out", "graphs/fladrc/ladrc.yaml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("that is the graph file"), "{}", text(&out.stderr));
 }
 
 #[test]
