@@ -40,6 +40,8 @@ struct Gen<'m> {
     model: &'m Model,
     visits: Vec<Visit>,
     n_constants: usize,
+    /// The held LTI blocks and their one input, in the simulator's order.
+    held: Vec<(usize, Port)>,
 }
 
 impl<'m> Gen<'m> {
@@ -61,7 +63,8 @@ impl<'m> Gen<'m> {
                 }
             })
             .collect();
-        Gen { model, visits, n_constants }
+        let held = model.between.held.iter().map(|&i| (i, model.in_ports[model.slots[i].inputs.start])).collect();
+        Gen { model, visits, n_constants, held }
     }
 
     /// `const IN_i` and `OUT_i` for every block called through a view
@@ -95,9 +98,8 @@ impl<'m> Gen<'m> {
             let _ = writeln!(out, "    /// `{}` ({})", meta.name.escape_debug(), meta.type_name.escape_debug());
             let _ = writeln!(out, "    b{}: {},", v.index, field_type(m, v.index));
         }
-        for (j, &i) in m.between.held.iter().enumerate() {
-            let width = m.in_ports[m.slots[i].inputs.start].width;
-            let _ = writeln!(out, "    z{j}: Zoh,\n    u{j}: [f64; {width}],");
+        for (j, (_, input)) in self.held.iter().enumerate() {
+            let _ = writeln!(out, "    z{j}: Zoh,\n    u{j}: [f64; {}],", input.width);
         }
         out.push_str("}\n\n");
     }
@@ -156,9 +158,12 @@ impl<'m> Gen<'m> {
             };
             let _ = writeln!(out, "            b{i}: {take}.ok_or_else(|| cg::mismatch(model, {i}))?,");
         }
-        for (j, &i) in m.between.held.iter().enumerate() {
-            let width = m.in_ports[m.slots[i].inputs.start].width;
-            let _ = writeln!(out, "            z{j}: cg::transition(model, {i})?,\n            u{j}: [0.0; {width}],");
+        for (j, (i, input)) in self.held.iter().enumerate() {
+            let _ = writeln!(
+                out,
+                "            z{j}: cg::transition(model, {i})?,\n            u{j}: [0.0; {}],",
+                input.width
+            );
         }
         out.push_str("        })\n    }\n\n");
     }
@@ -242,17 +247,16 @@ impl<'m> Gen<'m> {
     /// Held LTI blocks: their inputs latched at the major step, their
     /// states advanced by the exact transition.
     fn held(&self, out: &mut String) {
-        let m = self.model;
         out.push_str("    fn hold_inputs(&mut self) {\n");
-        for (j, &i) in m.between.held.iter().enumerate() {
-            let p = m.in_ports[m.slots[i].inputs.start];
+        for (j, (_, p)) in self.held.iter().enumerate() {
             let _ = writeln!(out, "        self.u{j}.copy_from_slice(&self.s[{}..{}]);", p.offset, p.offset + p.width);
         }
         out.push_str(
             "    }\n\n    #[allow(unused_variables)]\n    fn step_held(&mut self, dt: f64, x: &mut [f64]) {\n",
         );
-        for (j, &i) in m.between.held.iter().enumerate() {
-            let _ = writeln!(out, "        self.z{j}.step(dt, &mut x[{}], &self.u{j});", range(&m.slots[i].states));
+        for (j, (i, _)) in self.held.iter().enumerate() {
+            let _ =
+                writeln!(out, "        self.z{j}.step(dt, &mut x[{}], &self.u{j});", range(&self.visits[*i].states));
         }
         out.push_str("    }\n\n");
     }
