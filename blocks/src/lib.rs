@@ -10,7 +10,10 @@ use ctlgraph_core::registry::{ParamDoc, PortDoc, Registry};
 macro_rules! rust_type {
     ($ty:ident) => {
         fn rust_type(&self) -> Option<&'static str> {
-            Some(concat!(module_path!(), "::", stringify!($ty)))
+            let path = concat!(module_path!(), "::", stringify!($ty));
+            // The type must be defined where its `impl Block` is.
+            debug_assert_eq!(std::any::type_name::<Self>(), path);
+            Some(path)
         }
     };
 }
