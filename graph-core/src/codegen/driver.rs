@@ -3,9 +3,9 @@
 //! the generated sweeps, so both compute the same numbers to the bit.
 
 use crate::block::{Kernel, Port};
-use crate::compile::{BlockMeta, Model, signal_owner};
-use crate::sim::{self, Clock, RunStats, SimError, Timing};
-use ctlgraph_solver::{Integrator, OdeSystem, SolverError, Zoh};
+use crate::compile::{BlockMeta, Model};
+use crate::sim::{self, Blame, RunStats, SimError, Timing};
+use ctlgraph_solver::{Integrator, OdeSystem, Zoh};
 
 /// What `ctlgraph codegen` writes for a graph: its sweeps unrolled over
 /// the graph's blocks. Implemented by generated code only; the methods are
@@ -191,25 +191,16 @@ impl<G: GeneratedStep> Compiled<G> {
         let all = self.first || self.at_event;
         self.step.outputs(self.t, &self.x, self.first, all, &self.hit);
         self.first = false;
-        if !self.step.signals_finite()
-            && let Some(k) = self.step.signals().iter().position(|v| !v.is_finite())
-        {
-            let owner = signal_owner(&self.meta, &self.out_ports, k);
-            let what = match owner {
-                Some((i, port)) => match self.step.diagnose(i) {
-                    Some(why) => format!("output `{port}`: {why}"),
-                    None => format!("output `{port}`"),
-                },
-                None => "a signal".into(),
-            };
-            let value = self.step.signals()[k];
-            return Err(self.non_finite(owner.map(|(i, _)| i), what, value));
+        if !self.step.signals_finite() {
+            let step = &self.step;
+            return Err(self.blame().signal(step.signals(), self.t, |i| step.diagnose(i)));
         }
         Ok(())
     }
 
-    fn non_finite(&self, owner: Option<usize>, what: String, value: f64) -> SimError {
-        sim::non_finite(&self.meta, &self.in_ports, self.step.signals(), self.t, owner, what, value)
+    /// What names a block in this run's errors.
+    fn blame(&self) -> Blame<'_> {
+        Blame { meta: &self.meta, in_ports: &self.in_ports, out_ports: &self.out_ports }
     }
 
     /// Steps (3) and (4): updates, then integration to the next major step.
@@ -225,17 +216,7 @@ impl<G: GeneratedStep> Compiled<G> {
             let mut stage = Stage { step: &mut self.step, t_end: target };
             match self.integ.advance(&mut stage, t0, target, x) {
                 Ok(t) => t,
-                Err(SolverError::NonFinite { t, state: Some(k) }) => {
-                    let owner = sim::state_owner(&self.meta, k);
-                    let what = format!("state {} (inside the solver's step)", owner.map_or(k, |(_, j)| j));
-                    self.t = t;
-                    return Err(self.non_finite(owner.map(|(i, _)| i), what, f64::NAN));
-                }
-                Err(error) => {
-                    let culprit = error.state().and_then(|k| sim::state_owner(&self.meta, k));
-                    let culprit = culprit.map(|(i, j)| (self.meta[i].name.clone(), j));
-                    return Err(SimError::Solver { t: t0, error, culprit });
-                }
+                Err(error) => return Err(self.blame().solver(self.step.signals(), t0, error)),
             }
         };
         let tol = self.timing.tol;
@@ -256,12 +237,8 @@ impl<G: GeneratedStep> Compiled<G> {
         if hit || block_event || clamped {
             self.integ.invalidate();
         }
-        if !sim::all_finite(&self.x)
-            && let Some(k) = self.x.iter().position(|v| !v.is_finite())
-        {
-            let owner = sim::state_owner(&self.meta, k);
-            let what = format!("state {}", owner.map_or(k, |(_, j)| j));
-            return Err(self.non_finite(owner.map(|(i, _)| i), what, self.x[k]));
+        if !sim::all_finite(&self.x) {
+            return Err(self.blame().state(self.step.signals(), self.t, &self.x));
         }
         if self.t <= t0 {
             return Err(SimError::Stalled { t: t0, block: "?".into() });
@@ -270,15 +247,11 @@ impl<G: GeneratedStep> Compiled<G> {
         Ok(())
     }
 
-    /// The earliest of: next clock hit, next grid point, next block event,
-    /// the stop time (an event within tolerance of another wins).
+    /// The next major step's time, as the simulator decides it.
     fn next_major_time(&self) -> f64 {
         let timing = &self.timing;
-        let mut next = timing.clocks.iter().map(|c: &Clock| c.next).fold(self.stop, f64::min);
-        if timing.grid_step > 0.0 {
-            next = next.min(timing.grid.next);
-        }
-        if self.next_event <= next + timing.tol { self.next_event } else { next }
+        let grid = (timing.grid_step > 0.0).then_some(&timing.grid);
+        sim::next_major_time(&timing.clocks, grid, self.stop, self.next_event, timing.tol)
     }
 
     /// Runs to the stop time, handing the signals to `sink` at every major

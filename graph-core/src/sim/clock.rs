@@ -105,3 +105,16 @@ pub(crate) fn mark_hits(clocks: &mut [Clock], t: f64, tol: f64) -> bool {
     }
     any
 }
+
+/// The next major step's time: the earliest of the clocks' next hits, the
+/// fixed-step grid's next point (`grid`, when there is one), the block
+/// event `next_event` and `stop`. An event within `tol` of another
+/// candidate wins, so sources switch exactly at their event time.
+#[inline]
+pub(crate) fn next_major_time(clocks: &[Clock], grid: Option<&Clock>, stop: f64, next_event: f64, tol: f64) -> f64 {
+    let mut next = clocks.iter().fold(stop, |next, c| next.min(c.next));
+    if let Some(grid) = grid {
+        next = next.min(grid.next);
+    }
+    if next_event <= next + tol { next_event } else { next }
+}

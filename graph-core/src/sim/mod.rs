@@ -10,19 +10,21 @@
 //! block's mode must change (module `events`). After `initialize`, stepping
 //! allocates nothing.
 
+mod blame;
 mod clock;
 mod error;
 mod events;
 mod host;
 mod minor;
 pub(crate) mod visit;
-pub(crate) use clock::{Clock, Timing, mark_hits};
+pub(crate) use blame::Blame;
+pub(crate) use clock::{Clock, Timing, mark_hits, next_major_time};
 pub use error::SimError;
 pub use host::Snapshot;
 
 use crate::block::{Io, Port};
 use crate::compile::{Model, Rate, Slot};
-use ctlgraph_solver::{Integrator, Method, SolverError, Stats, Zoh};
+use ctlgraph_solver::{Integrator, Method, Stats, Zoh};
 pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
 use minor::Minor;
@@ -284,31 +286,16 @@ impl Simulator {
         self.first = false;
         self.inputs_changed = false;
         self.watch.record_signs(&mut self.model, &mut self.signals, &self.x, self.t);
-        if !all_finite(&self.signals)
-            && let Some(k) = self.signals.iter().position(|v| !v.is_finite())
-        {
-            let owner = self.model.signal_owner(k);
-            let what = match owner {
-                Some((i, port)) => match self.model.blocks[i].diagnose() {
-                    Some(why) => format!("output `{port}`: {why}"),
-                    None => format!("output `{port}`"),
-                },
-                None => "a signal".into(),
-            };
-            return Err(self.non_finite(self.t, owner.map(|(i, _)| i), what, self.signals[k]));
+        if !all_finite(&self.signals) {
+            let m = &self.model;
+            return Err(self.blame().signal(&self.signals, self.t, |i| m.blocks[i].diagnose()));
         }
         Ok(())
     }
 
-    /// The error for block `owner` having produced `value` (not finite) as
-    /// `what`, with its inputs as they are now (block `?` when unknown).
-    fn non_finite(&self, t: f64, owner: Option<usize>, what: String, value: f64) -> SimError {
-        non_finite(&self.model.meta, &self.model.in_ports, &self.signals, t, owner, what, value)
-    }
-
-    /// The block owning state `k`, and the state's index within the block.
-    fn state_owner(&self, k: usize) -> Option<(usize, usize)> {
-        state_owner(&self.model.meta, k)
+    /// What names a block in this model's errors.
+    fn blame(&self) -> Blame<'_> {
+        Blame { meta: &self.model.meta, in_ports: &self.model.in_ports, out_ports: &self.model.out_ports }
     }
 
     /// Blocks with zero crossings may reset their states at a major step;
@@ -352,18 +339,7 @@ impl Simulator {
         } else {
             match self.integ.advance(&mut sys, t0, target, x) {
                 Ok(t) => t,
-                // A state that blew up inside the step: name its block, as a
-                // blow-up at a major step does.
-                Err(SolverError::NonFinite { t, state: Some(k) }) => {
-                    let owner = self.state_owner(k);
-                    let what = format!("state {} (inside the solver's step)", owner.map_or(k, |(_, j)| j));
-                    return Err(self.non_finite(t, owner.map(|(i, _)| i), what, f64::NAN));
-                }
-                Err(error) => {
-                    let culprit = error.state().and_then(|k| self.state_owner(k));
-                    let culprit = culprit.map(|(i, j)| (self.model.meta[i].name.clone(), j));
-                    return Err(SimError::Solver { t: t0, error, culprit });
-                }
+                Err(error) => return Err(self.blame().solver(&self.signals, t0, error)),
             }
         };
         let event = self.watch.locate(&mut sys, &mut self.integ, t0, t_new, x);
@@ -401,12 +377,8 @@ impl Simulator {
         if hit || block_event || clamped {
             self.integ.invalidate();
         }
-        if !all_finite(&self.x)
-            && let Some(k) = self.x.iter().position(|v| !v.is_finite())
-        {
-            let owner = self.state_owner(k);
-            let what = format!("state {}", owner.map_or(k, |(_, j)| j));
-            return Err(self.non_finite(self.t, owner.map(|(i, _)| i), what, self.x[k]));
+        if !all_finite(&self.x) {
+            return Err(self.blame().state(&self.signals, self.t, &self.x));
         }
         self.stalled = if self.t > t0 { 0 } else { self.stalled + 1 };
         if self.stalled > 1000 {
@@ -423,18 +395,11 @@ impl Simulator {
         Ok(())
     }
 
-    /// The earliest of: next clock hit, next grid point, next block event,
-    /// the stop time. An event within tolerance of another candidate wins,
-    /// so sources switch exactly at their event time.
+    /// The next major step's time ([`next_major_time`]), or a host's
+    /// landing point before it.
     fn next_major_time(&self) -> f64 {
-        let mut next = self.stop;
-        for c in &self.clocks {
-            next = next.min(c.next);
-        }
-        if self.grid_step > 0.0 {
-            next = next.min(self.grid.next);
-        }
-        let next = if self.next_event <= next + self.tol { self.next_event } else { next };
+        let grid = (self.grid_step > 0.0).then_some(&self.grid);
+        let next = next_major_time(&self.clocks, grid, self.stop, self.next_event, self.tol);
         // A host's landing point, unless a step of the run's own falls on it.
         if self.pause < next - self.tol { self.pause } else { next }
     }
@@ -497,40 +462,6 @@ pub(crate) fn all_finite(values: &[f64]) -> bool {
         }
     }
     (acc[0] + acc[1] + acc[2] + acc[3] + tail) == 0.0
-}
-
-/// The error for block `owner` (index into `meta`) having produced `value`
-/// (not finite) as `what`, with its inputs as they are in `signals` (block
-/// `?` when unknown).
-pub(crate) fn non_finite(
-    meta: &[crate::compile::BlockMeta],
-    in_ports: &[Port],
-    signals: &[f64],
-    t: f64,
-    owner: Option<usize>,
-    what: String,
-    value: f64,
-) -> SimError {
-    let Some(i) = owner else {
-        return SimError::NonFinite { t, block: "?".into(), what, value, inputs: vec![] };
-    };
-    let meta = &meta[i];
-    let mut inputs = Vec::new();
-    for (name, p) in meta.input_names.iter().zip(meta.inputs.clone()) {
-        let port = in_ports[p];
-        let values = &signals[port.offset..port.offset + port.width];
-        match values {
-            [v] => inputs.push((name.clone(), *v)),
-            _ => inputs.extend(values.iter().enumerate().map(|(k, v)| (format!("{name}[{k}]"), *v))),
-        }
-    }
-    SimError::NonFinite { t, block: meta.name.clone(), what, value, inputs }
-}
-
-/// The block owning state `k`, and the state's index within the block.
-pub(crate) fn state_owner(meta: &[crate::compile::BlockMeta], k: usize) -> Option<(usize, usize)> {
-    let i = meta.iter().position(|m| m.states.contains(&k))?;
-    Some((i, k - meta[i].states.start))
 }
 
 pub(crate) fn io_for<'a>(
