@@ -1,5 +1,6 @@
 //! Generates the step of every bundled graph `ctlgraph_core::codegen`
-//! accepts (`graphs/**/*.yaml`, `benches/*.yaml`) into `OUT_DIR`, and an
+//! accepts (`graphs/**/*.yaml`, `benches/*.yaml`, and `compiled/graphs/*.yaml`,
+//! which exist to test the generator) into `OUT_DIR`, and an
 //! index of them (`graphs.rs`) for `src/lib.rs` to include.
 
 use std::fmt::Write;
@@ -9,7 +10,7 @@ fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("the crate sits in the workspace");
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     let mut files = Vec::new();
-    for dir in ["graphs", "benches"] {
+    for dir in ["graphs", "benches", "compiled/graphs"] {
         collect(&root.join(dir), &mut files);
         println!("cargo::rerun-if-changed={}", root.join(dir).display());
     }

@@ -6,15 +6,20 @@
 mod common;
 use common::{ctlgraph, path, text};
 use ctlgraph::compile_file;
-use ctlgraph_compiled_graphs::{GENERATED, REFUSED};
-use ctlgraph_core::Simulator;
+use ctlgraph_compiled_graphs::{GENERATED, REFUSED, compiled_graphs_clocks};
+use ctlgraph_core::codegen::Compiled;
+use ctlgraph_core::{Model, Simulator};
 use std::path::Path;
 
 /// Major steps compared per graph (the whole run when it is shorter).
 const STEPS: usize = 3_000;
 
 fn interpreted(path: &str) -> Vec<(f64, Vec<f64>)> {
-    let mut sim = Simulator::new(compile_file(Path::new(path), &[]).unwrap(), None);
+    interpreted_with(compile_file(Path::new(path), &[]).unwrap())
+}
+
+fn interpreted_with(model: Model) -> Vec<(f64, Vec<f64>)> {
+    let mut sim = Simulator::new(model, None);
     let mut steps = Vec::new();
     sim.run_while(&mut |t, signals| {
         steps.push((t, signals.to_vec()));
@@ -24,18 +29,49 @@ fn interpreted(path: &str) -> Vec<(f64, Vec<f64>)> {
     steps
 }
 
+/// The same major steps: times and signals, to the bit.
+fn assert_same(what: &str, got: &[(f64, Vec<f64>)], expected: &[(f64, Vec<f64>)]) {
+    assert_eq!(got.len(), expected.len(), "{what}: major steps");
+    for ((t, s), (t_ref, s_ref)) in got.iter().zip(expected) {
+        assert_eq!(t.to_bits(), t_ref.to_bits(), "{what}: time {t} against {t_ref}");
+        for (k, (v, r)) in s.iter().zip(s_ref).enumerate() {
+            assert_eq!(v.to_bits(), r.to_bits(), "{what}: signal {k} at t = {t}: {v} against {r}");
+        }
+    }
+}
+
 #[test]
 fn every_generated_step_equals_the_interpreter_to_the_bit() {
     for (path, trace) in GENERATED {
-        let expected = interpreted(path);
         let got = trace(&compile_file(Path::new(path), &[]).unwrap(), STEPS).unwrap();
-        assert_eq!(got.len(), expected.len(), "{path}: major steps");
-        for ((t, s), (t_ref, s_ref)) in got.iter().zip(&expected) {
-            assert_eq!(t.to_bits(), t_ref.to_bits(), "{path}: time {t} against {t_ref}");
-            for (k, (v, r)) in s.iter().zip(s_ref).enumerate() {
-                assert_eq!(v.to_bits(), r.to_bits(), "{path}: signal {k} at t = {t}: {v} against {r}");
-            }
-        }
+        assert_same(path, &got, &interpreted(path));
+    }
+}
+
+/// Clocks counted in grid steps where every rate is on the grid, by
+/// their own times where one is not, and the same steps either way: an
+/// event between grid points, a stop time off the grid, rates of 1, 2,
+/// 2.5, 3 and 4 steps, an offset.
+#[test]
+fn generated_time_keeping_equals_the_interpreters_on_and_off_the_grid() {
+    const PATH: &str = "compiled/graphs/clocks.yaml";
+    let variants: [(&[(&str, &str)], bool); 5] = [
+        (&[], true),
+        (&[("T_ref", "0.0025")], false),
+        (&[("T_ref", "0.003")], false),
+        (&[("offset", "0.001")], false),
+        (&[("T_ctrl", "0.001"), ("t_kick", "0.2")], true),
+    ];
+    for (sets, on_grid) in variants {
+        let sets: Vec<(String, String)> = sets.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+        let model = compile_file(Path::new(PATH), &sets).unwrap();
+        let run = Compiled::<compiled_graphs_clocks::Step>::new(&model, None).unwrap();
+        assert_eq!(run.clocks_on_grid(), on_grid, "{sets:?}");
+        let (_, trace) = GENERATED.iter().find(|(p, _)| *p == PATH).unwrap();
+        let got = trace(&model, usize::MAX).unwrap();
+        assert!(got.len() > 250, "{sets:?}: the whole run");
+        let expected = interpreted_with(compile_file(Path::new(PATH), &sets).unwrap());
+        assert_same(&format!("{PATH} {sets:?}"), &got, &expected);
     }
 }
 

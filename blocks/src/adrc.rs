@@ -101,6 +101,7 @@ pub const TYPES: &[BlockType] = &[
 /// Han's time-optimal synthesis function fst(x1, x2, δ, h0) with
 /// c = x1 + c_step·x2: Han's original has c_step = h0, the paper prints
 /// the sample time h (see the block doc).
+#[inline]
 pub fn fst(x1: f64, x2: f64, delta: f64, h0: f64, c_step: f64) -> f64 {
     let d = delta * h0;
     let d0 = h0 * d;
@@ -144,6 +145,7 @@ impl TrackingDifferentiator {
     }
 
     /// One step with reference `r`; returns the new (r1, r2).
+    #[inline]
     pub fn step(&mut self, r: f64) -> (f64, f64) {
         let x1 = self.r1 - r;
         let f = if self.fhan {
@@ -163,10 +165,12 @@ impl Block for TrackingDifferentiator {
         self.r1 = self.initial;
         self.r2 = 0.0;
     }
+    #[inline(always)]
     fn output(&mut self, io: &mut Io) {
         io.set(0, self.r1);
         io.set(1, self.r2);
     }
+    #[inline(always)]
     fn update(&mut self, io: &mut Io) {
         self.step(io.u(0));
     }
@@ -239,6 +243,7 @@ impl Leso {
     /// block accepts (1–3) step in fixed-size loops the compiler unrolls:
     /// the same operations in the same order as the general loop, without
     /// its bounds checks (tested bit for bit).
+    #[inline]
     pub fn step(&mut self, y: f64, u: f64) {
         match self.z.len() {
             2 => self.step_fixed::<2>(y, u),
@@ -248,6 +253,7 @@ impl Leso {
         }
     }
 
+    #[inline]
     fn step_fixed<const N: usize>(&mut self, y: f64, u: f64) {
         let (Ok(z), Ok(beta)) = (<&mut [f64; N]>::try_from(&mut self.z[..]), <&[f64; N]>::try_from(&self.beta[..]))
         else {
@@ -305,10 +311,12 @@ impl Block for Leso {
         self.z.copy_from_slice(&self.initial);
         x0.copy_from_slice(if self.h > 0.0 { &[] } else { &self.initial[..] });
     }
+    #[inline(always)]
     fn output(&mut self, io: &mut Io) {
         let z = if self.h > 0.0 { &self.z[..] } else { io.x };
         io.set_all(0, z);
     }
+    #[inline(always)]
     fn update(&mut self, io: &mut Io) {
         if self.h > 0.0 {
             self.step(io.u(0), io.u(1));
@@ -360,6 +368,7 @@ impl Block for Lsef {
     fn updates(&self) -> bool {
         false
     }
+    #[inline(always)]
     fn output(&mut self, io: &mut Io) {
         let a: [f64; 2] = std::array::from_fn(|i| self.alpha_ports[i].map_or(self.alpha[i], |p| io.u(p)));
         let z = io.input(self.z_port);

@@ -175,21 +175,22 @@ impl Lti {
         Built::new(self, iface)
     }
 
-    /// y = C·x (+ D·u) into the scratch, then to the port.
+    /// y = C·x (+ D·u) into the scratch. Out of line, and given slices
+    /// rather than the view: a view passed to an outlined call would have
+    /// to be built in memory on the common path too.
     #[inline(never)]
-    fn output_general(&mut self, io: &mut Io) {
+    fn output_general(&mut self, x: &[f64], u: &[f64]) {
         if self.feedthrough {
-            self.ss.output(io.x, io.input(0), &mut self.y);
+            self.ss.output(x, u, &mut self.y);
         } else {
-            self.ss.output_state_only(io.x, &mut self.y);
+            self.ss.output_state_only(x, &mut self.y);
         }
-        io.set_all(0, &self.y);
     }
 
     /// dx = A·x + B·u for several inputs, out of line like `output_general`.
     #[inline(never)]
-    fn derivatives_general(&self, io: &Io, dx: &mut [f64]) {
-        self.ss.derivative(io.x, io.input(0), dx);
+    fn derivatives_general(&self, x: &[f64], u: &[f64], dx: &mut [f64]) {
+        self.ss.derivative(x, u, dx);
     }
 }
 
@@ -204,19 +205,22 @@ impl Block for Lti {
     fn initialize(&mut self, x0: &mut [f64]) {
         x0.copy_from_slice(&self.x0);
     }
+    #[inline(always)]
     fn output(&mut self, io: &mut Io) {
         if !self.feedthrough && self.y.len() == 1 {
             // A transfer function: y = C·x straight to the port (the
             // common case, kept free of the general case's registers).
             return io.set(0, self.ss.output_state_only_scalar(io.x));
         }
-        self.output_general(io);
+        self.output_general(io.x, io.input(0));
+        io.set_all(0, &self.y);
     }
+    #[inline(always)]
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
         if self.ss.m == 1 {
             return self.ss.derivative_single_input(io.x, io.u(0), dx);
         }
-        self.derivatives_general(io, dx);
+        self.derivatives_general(io.x, io.input(0), dx);
     }
     fn lti(&self) -> Option<&StateSpace> {
         Some(&self.ss)

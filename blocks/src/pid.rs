@@ -65,14 +65,18 @@ pub struct PidLaw {
 }
 
 impl PidLaw {
-    #[inline]
+    #[inline(always)]
     fn gains(&self, io: &Io) -> [f64; 3] {
         let g = [self.kp, self.ki, self.kd];
+        if self.gain_ports == [None; 3] {
+            return g; // fixed gains, the common case: one test, not one per gain
+        }
         std::array::from_fn(|i| self.gain_ports[i].map_or(g[i], |p| io.u(p)))
     }
 
     /// The integrator's input: ki·e with anti-windup, given the unlimited
     /// output `v` and the limited `u`.
+    #[inline(always)]
     fn integrand(&self, ki_e: f64, v: f64, u: f64) -> f64 {
         match self.anti_windup {
             AntiWindup::None => ki_e,
@@ -100,6 +104,7 @@ pub struct ContinuousPid {
 
 impl ContinuousPid {
     /// (v, u, ki·e): unlimited and limited output.
+    #[inline(always)]
     fn eval(&self, io: &Io) -> (f64, f64, f64) {
         let [kp, ki, kd] = self.law.gains(io);
         let e = io.u(0);
@@ -118,15 +123,18 @@ impl Block for ContinuousPid {
         x0[1] = 0.0;
         self.holding = false;
     }
+    #[inline(always)]
     fn output(&mut self, io: &mut Io) {
         let (_, u, _) = self.eval(io);
         io.set(0, u);
     }
+    #[inline(always)]
     fn update(&mut self, io: &mut Io) {
         let (v, u, ki_e) = self.eval(io);
         self.holding =
             self.law.anti_windup == AntiWindup::Clamping && self.law.integrand(ki_e, v, u) == 0.0 && ki_e != 0.0;
     }
+    #[inline(always)]
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
         let e = io.u(0);
         dx[0] = match self.law.anti_windup {

@@ -104,7 +104,7 @@ impl StateSpace {
 
     /// [`StateSpace::derivative`] of a single-input system, u a number (the
     /// same sums: Σ over one term is that term).
-    #[inline]
+    #[inline(always)]
     pub fn derivative_single_input(&self, x: &[f64], u: f64, dx: &mut [f64]) {
         let (a, b) = (&self.a, &self.b);
         match self.n {
@@ -144,7 +144,7 @@ impl StateSpace {
     }
 
     /// [`StateSpace::output_state_only`] of a single-output system.
-    #[inline]
+    #[inline(always)]
     pub fn output_state_only_scalar(&self, x: &[f64]) -> f64 {
         match self.n {
             1 => dot::<1>(&self.c, x),

@@ -81,6 +81,7 @@ impl Zoh {
     }
 
     /// `x ← Φ(dt)·x + Γ(dt)·u`.
+    #[inline]
     pub fn step(&mut self, dt: f64, x: &mut [f64], u: &[f64]) {
         let (n, m) = (self.ss.n, self.ss.m);
         let slot = self.transition(dt);

@@ -4,7 +4,7 @@
 
 use crate::block::{Kernel, Port};
 use crate::compile::{BlockMeta, Model};
-use crate::sim::{self, Blame, RunStats, SimError, Timing};
+use crate::sim::{self, Blame, OnGrid, RunStats, SimError, Timing};
 use ctlgraph_solver::{Integrator, OdeSystem, Zoh};
 
 /// What `ctlgraph codegen` writes for a graph: its sweeps unrolled over
@@ -63,6 +63,20 @@ pub fn all_finite(values: &[f64]) -> bool {
     sim::all_finite(values)
 }
 
+/// `values` (a run's states or clock hits) as an array of the length the
+/// generated code was made for: one length check per sweep, after which
+/// its constant indices and ranges need none.
+#[inline(always)]
+pub fn fixed<T, const N: usize>(values: &[T]) -> &[T; N] {
+    values.try_into().expect("a generated step's states and clocks have the counts it was generated for")
+}
+
+/// [`fixed`], writable.
+#[inline(always)]
+pub fn fixed_mut<T, const N: usize>(values: &mut [T]) -> &mut [T; N] {
+    values.try_into().expect("a generated step's states and clocks have the counts it was generated for")
+}
+
 /// A zeroed signal buffer of `N` values, on the heap (a large one would
 /// not fit on the stack).
 pub fn zeros<const N: usize>() -> Box<[f64; N]> {
@@ -77,6 +91,8 @@ pub struct Compiled<G: GeneratedStep> {
     x: Vec<f64>,
     integ: Integrator,
     timing: Timing,
+    /// The clocks counted in grid steps, when they all fall on the grid.
+    on_grid: Option<OnGrid>,
     hit: Vec<bool>,
     t: f64,
     stop: f64,
@@ -125,6 +141,7 @@ impl<G: GeneratedStep> Compiled<G> {
             x: vec![0.0; model.n_states],
             integ: Integrator::new(timing.method, model.between.n_integrated),
             hit: vec![false; timing.clocks.len()],
+            on_grid: OnGrid::new(&timing),
             timing,
             t: 0.0,
             stop,
@@ -151,7 +168,12 @@ impl<G: GeneratedStep> Compiled<G> {
         self.step.signals_mut().iter_mut().for_each(|s| *s = 0.0);
         self.step.initialize(&mut self.x);
         self.timing.clocks.iter_mut().for_each(|c| c.set_tick(0));
-        self.mark_hits();
+        match &mut self.on_grid {
+            Some(on_grid) => on_grid.reset(&mut self.hit),
+            None => {
+                self.mark_hits();
+            }
+        }
         self.next_event = self.step.next_event(self.t);
         self.integ.reset();
     }
@@ -172,11 +194,20 @@ impl<G: GeneratedStep> Compiled<G> {
         RunStats { major_steps: self.major_steps, solver: self.integ.stats(), events: 0 }
     }
 
+    /// Whether the run counts its discrete rates in grid steps (every
+    /// period a whole number of fixed steps, no offsets: see
+    /// `sim::clock::OnGrid`) rather than keeping a time per clock.
+    pub fn clocks_on_grid(&self) -> bool {
+        self.on_grid.is_some()
+    }
+
     /// Whether the run has reached its stop time.
     pub fn finished(&self) -> bool {
         self.t >= self.stop - self.timing.tol && !self.first
     }
 
+    /// The clocks due at `self.t`, found by their times (when they are
+    /// not all on the grid).
     fn mark_hits(&mut self) -> bool {
         let any = sim::mark_hits(&mut self.timing.clocks, self.t, self.timing.tol);
         for (h, c) in self.hit.iter_mut().zip(&self.timing.clocks) {
@@ -224,11 +255,15 @@ impl<G: GeneratedStep> Compiled<G> {
         if self.t > t0 {
             self.step.step_held(self.t - t0, &mut self.x);
         }
+        let on_grid = self.timing.grid.next <= self.t + tol;
         if self.timing.grid_step > 0.0 {
             self.timing.grid.pass(self.t, tol);
         }
         let clamped = self.step.clamp_states(&mut self.x[..self.n_integrated]);
-        let hit = self.mark_hits();
+        let hit = match &mut self.on_grid {
+            Some(clocks) => clocks.mark_hits(on_grid, &mut self.hit),
+            None => self.mark_hits(),
+        };
         let block_event = self.t >= self.next_event - tol;
         self.at_event = block_event;
         if block_event {
@@ -248,10 +283,13 @@ impl<G: GeneratedStep> Compiled<G> {
     }
 
     /// The next major step's time, as the simulator decides it.
+    /// With the clocks on the grid, their next hits are grid points no
+    /// earlier than the grid's next: the grid alone decides.
     fn next_major_time(&self) -> f64 {
         let timing = &self.timing;
         let grid = (timing.grid_step > 0.0).then_some(&timing.grid);
-        sim::next_major_time(&timing.clocks, grid, self.stop, self.next_event, timing.tol)
+        let clocks = if self.on_grid.is_some() { &[][..] } else { &timing.clocks[..] };
+        sim::next_major_time(clocks, grid, self.stop, self.next_event, timing.tol)
     }
 
     /// Runs to the stop time, handing the signals to `sink` at every major

@@ -170,6 +170,7 @@ impl<'m> Gen<'m> {
 
     fn initialize(&self, out: &mut String) {
         out.push_str("    #[allow(unused_variables)]\n    fn initialize(&mut self, x: &mut [f64]) {\n");
+        self.fix_states(out, true, self.model.n_states);
         for v in &self.visits {
             let states = if v.states.is_empty() { "[]".to_string() } else { format!("x[{}]", range(&v.states)) };
             let _ = writeln!(out, "        self.b{}.initialize(&mut {states});", v.index);
@@ -183,6 +184,9 @@ impl<'m> Gen<'m> {
         out.push_str(
             "    #[allow(unused_variables)]\n    fn outputs(&mut self, t: f64, x: &[f64], first: bool, all: bool, hit: &[bool]) {\n",
         );
+        self.fix_states(out, false, self.model.n_states);
+        self.fix_hits(out);
+        bind_signals(out);
         for v in &self.visits {
             let due = match v.rate {
                 Rate::Constant => "first".to_string(),
@@ -206,15 +210,12 @@ impl<'m> Gen<'m> {
         let i = v.index;
         match v.inline {
             Some(k) => match k.kernel {
-                Kernel::Copy => format!("self.s.copy_within({}..{}, {});", k.u0, k.u0 + k.width, k.y),
+                Kernel::Copy => format!("s.copy_within({}..{}, {});", k.u0, k.u0 + k.width, k.y),
                 Kernel::Scale(_) => {
-                    format!(
-                        "self.s[{}] = Kernel::Scale(self.k[{}]).eval(self.s[{}], self.s[{}]);",
-                        k.y, v.constants, k.u0, k.u1
-                    )
+                    format!("s[{}] = Kernel::Scale(self.k[{}]).eval(s[{}], s[{}]);", k.y, v.constants, k.u0, k.u1)
                 }
                 Kernel::Affine2(..) => format!(
-                    "self.s[{}] = Kernel::Affine2(self.k[{}], self.k[{}]).eval(self.s[{}], self.s[{}]);",
+                    "s[{}] = Kernel::Affine2(self.k[{}], self.k[{}]).eval(s[{}], s[{}]);",
                     k.y,
                     v.constants,
                     v.constants + 1,
@@ -229,6 +230,9 @@ impl<'m> Gen<'m> {
     /// The update sweep: continuous blocks always, discrete ones at hits.
     fn updates(&self, out: &mut String) {
         out.push_str("    #[allow(unused_variables)]\n    fn updates(&mut self, t: f64, x: &[f64], hit: &[bool]) {\n");
+        self.fix_states(out, false, self.model.n_states);
+        self.fix_hits(out);
+        bind_signals(out);
         for v in self.visits.iter().filter(|v| v.updates) {
             let call = format!("self.b{}.update(&mut {});", v.index, io(v.index, "false", &v.states, false));
             match v.rate {
@@ -254,6 +258,9 @@ impl<'m> Gen<'m> {
         out.push_str(
             "    }\n\n    #[allow(unused_variables)]\n    fn step_held(&mut self, dt: f64, x: &mut [f64]) {\n",
         );
+        if !self.held.is_empty() {
+            self.fix_states(out, true, self.model.n_states);
+        }
         for (j, (i, _)) in self.held.iter().enumerate() {
             let _ =
                 writeln!(out, "        self.z{j}.step(dt, &mut x[{}], &self.u{j});", range(&self.visits[*i].states));
@@ -265,8 +272,14 @@ impl<'m> Gen<'m> {
     fn derivatives(&self, out: &mut String) {
         let m = self.model;
         out.push_str(
-            "    #[allow(unused_variables)]\n    fn derivatives(&mut self, t: f64, left: bool, x: &[f64], dx: &mut [f64]) {\n",
+            "    #[allow(unused_variables)]\n    #[inline]\n    fn derivatives(&mut self, t: f64, left: bool, x: &[f64], dx: &mut [f64]) {\n",
         );
+        let n = m.between.n_integrated;
+        if n > 0 {
+            self.fix_states(out, false, n);
+            let _ = writeln!(out, "        let dx: &mut [f64; {n}] = cg::fixed_mut(dx);");
+        }
+        bind_signals(out);
         for &i in &m.between.minor {
             let _ = writeln!(out, "        {}", self.output_call(&self.visits[i], "left", true));
         }
@@ -283,13 +296,32 @@ impl<'m> Gen<'m> {
     }
 
     fn clamp_states(&self, out: &mut String) {
-        out.push_str(
-            "    #[allow(unused_variables)]\n    fn clamp_states(&mut self, x: &mut [f64]) -> bool {\n        false",
-        );
+        out.push_str("    #[allow(unused_variables)]\n    fn clamp_states(&mut self, x: &mut [f64]) -> bool {\n");
+        if !self.model.between.integrated.is_empty() {
+            self.fix_states(out, true, self.model.between.n_integrated);
+        }
+        out.push_str("        false");
         for &i in &self.model.between.integrated {
             let _ = write!(out, "\n            | self.b{i}.clamp_states(&mut x[{}])", range(&self.visits[i].states));
         }
         out.push_str("\n    }\n\n");
+    }
+
+    /// Rebinds `x` as an array of `n` states, so that the sweep's constant
+    /// ranges of it are not bounds-checked.
+    fn fix_states(&self, out: &mut String, writable: bool, n: usize) {
+        let _ = match writable {
+            true => writeln!(out, "        let x: &mut [f64; {n}] = cg::fixed_mut(x);"),
+            false => writeln!(out, "        let x: &[f64; {n}] = cg::fixed(x);"),
+        };
+    }
+
+    /// Rebinds `hit` as an array of one flag per clock (when a sweep
+    /// reads them).
+    fn fix_hits(&self, out: &mut String) {
+        if !self.model.clocks.is_empty() {
+            let _ = writeln!(out, "        let hit: &[bool; {}] = cg::fixed(hit);", self.model.clocks.len());
+        }
     }
 
     /// The earliest block event after `t`, blocks in order as the simulator
@@ -309,6 +341,16 @@ impl<'m> Gen<'m> {
         }
         out.push_str("            _ => None,\n        }\n    }\n");
     }
+}
+
+/// Binds `s` to the signal buffer for a sweep. Its address then sits in
+/// a register, so the compiler sees that a kernel reads the very value a
+/// block has just written and passes it on; through `self.s` it reloads
+/// the buffer after every store, and may read two adjacent signals with
+/// one vector load that waits for the narrower store before it
+/// (store-forwarding stall: a quarter of the PID loop's stage time).
+fn bind_signals(out: &mut String) {
+    out.push_str("        let s = &mut *self.s;\n");
 }
 
 /// How many of `Step::k` a kernel's constants take.
@@ -331,7 +373,7 @@ fn field_type(model: &Model, i: usize) -> String {
 /// Block `i`'s view at time `t` over states `x[states]` (a stage's when `minor`).
 fn io(i: usize, left: &str, states: &std::ops::Range<usize>, minor: bool) -> String {
     let x = if states.is_empty() { "&[]".to_string() } else { format!("&x[{}]", range(states)) };
-    let view = format!("Io::new(t, {left}, {x}, &mut *self.s, &IN_{i}, &OUT_{i})");
+    let view = format!("Io::new(t, {left}, {x}, &mut *s, &IN_{i}, &OUT_{i})");
     if minor { format!("{view}.in_minor_step(false)") } else { view }
 }
 

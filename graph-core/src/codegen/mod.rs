@@ -20,7 +20,7 @@ mod emit;
 
 use crate::compile::Model;
 pub use ctlgraph_solver::Zoh;
-pub use driver::{Compiled, GeneratedStep, all_finite, kernel, mismatch, transition, zeros};
+pub use driver::{Compiled, GeneratedStep, all_finite, fixed, fixed_mut, kernel, mismatch, transition, zeros};
 
 /// Why a model cannot be generated: one sentence per reason.
 pub fn refusals(model: &Model) -> Vec<String> {

@@ -118,3 +118,60 @@ pub(crate) fn next_major_time(clocks: &[Clock], grid: Option<&Clock>, stop: f64,
     }
     if next_event <= next + tol { next_event } else { next }
 }
+
+/// The discrete rates counted in fixed steps, for runs where that is exact:
+/// the grid's step is 1/n s and every clock's period 1/n_c s (whole n,
+/// n_c, as [`Grid`] keeps them) with n_c dividing n, and no offset. A
+/// clock's hit times are then the grid's own points, bit for bit
+/// (tick/n_c and (tick·n/n_c)/n are the same quotient, each correctly
+/// rounded), so a clock is due at every (n/n_c)-th grid point and needs no
+/// time of its own: no division, no comparison of times per clock and
+/// step. Gives the hits [`mark_hits`] gives. (A period of 0.003 s on a
+/// 1 ms grid is not counted: its times k·0.003 may differ from the grid's
+/// 3k/1000 in the last bit, and the simulator takes the earlier.)
+#[derive(Clone, Debug)]
+pub(crate) struct OnGrid {
+    /// Grid steps per period, per clock.
+    every: Vec<u64>,
+    /// Grid points until the next hit, per clock.
+    left: Vec<u64>,
+}
+
+impl OnGrid {
+    /// `None` when some clock is not on the grid (or there is no grid).
+    pub(crate) fn new(timing: &Timing) -> Option<Self> {
+        let n = timing.grid.grid.per_unit.filter(|_| timing.grid_step > 0.0)?;
+        let every = timing
+            .clocks
+            .iter()
+            .map(|c| match c.grid.per_unit {
+                Some(n_c) if c.offset == 0.0 && n % n_c == 0.0 => Some((n / n_c) as u64),
+                _ => None,
+            })
+            .collect::<Option<Vec<u64>>>()?;
+        Some(OnGrid { left: every.clone(), every })
+    }
+
+    /// Back to t = 0, where every clock is due.
+    pub(crate) fn reset(&mut self, hit: &mut [bool]) {
+        self.left.copy_from_slice(&self.every);
+        hit.fill(true);
+    }
+
+    /// Marks the clocks due at a major step: at a grid point when
+    /// `on_grid` (the step reached the grid's next point), none otherwise
+    /// (a block event or the stop time between grid points). Returns
+    /// whether any was due.
+    #[inline]
+    pub(crate) fn mark_hits(&mut self, on_grid: bool, hit: &mut [bool]) -> bool {
+        let mut any = false;
+        for ((left, &every), hit) in self.left.iter_mut().zip(&self.every).zip(hit) {
+            *hit = on_grid && *left == 1;
+            if on_grid {
+                *left = if *hit { every } else { *left - 1 };
+            }
+            any |= *hit;
+        }
+        any
+    }
+}
