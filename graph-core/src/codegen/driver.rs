@@ -65,7 +65,9 @@ pub fn all_finite(values: &[f64]) -> bool {
 
 /// `values` (a run's states or clock hits) as an array of the length the
 /// generated code was made for: one length check per sweep, after which
-/// its constant indices and ranges need none.
+/// its constant indices and ranges need none. The check cannot fail:
+/// [`Compiled`] passes its model's own lengths, and refuses a model whose
+/// structure differs from the one the code was generated for.
 #[inline(always)]
 pub fn fixed<T, const N: usize>(values: &[T]) -> &[T; N] {
     values.try_into().expect("a generated step's states and clocks have the counts it was generated for")
@@ -195,7 +197,7 @@ impl<G: GeneratedStep> Compiled<G> {
     }
 
     /// Whether the run counts its discrete rates in grid steps (every
-    /// period a whole number of fixed steps, no offsets: see
+    /// period 1/n_c s dividing the grid's step of 1/n s, no offsets: see
     /// `sim::clock::OnGrid`) rather than keeping a time per clock.
     pub fn clocks_on_grid(&self) -> bool {
         self.on_grid.is_some()
@@ -255,10 +257,7 @@ impl<G: GeneratedStep> Compiled<G> {
         if self.t > t0 {
             self.step.step_held(self.t - t0, &mut self.x);
         }
-        let on_grid = self.timing.grid.next <= self.t + tol;
-        if self.timing.grid_step > 0.0 {
-            self.timing.grid.pass(self.t, tol);
-        }
+        let on_grid = self.timing.grid_step > 0.0 && self.timing.grid.pass(self.t, tol);
         let clamped = self.step.clamp_states(&mut self.x[..self.n_integrated]);
         let hit = match &mut self.on_grid {
             Some(clocks) => clocks.mark_hits(on_grid, &mut self.hit),

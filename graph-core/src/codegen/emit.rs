@@ -170,7 +170,7 @@ impl<'m> Gen<'m> {
 
     fn initialize(&self, out: &mut String) {
         out.push_str("    #[allow(unused_variables)]\n    fn initialize(&mut self, x: &mut [f64]) {\n");
-        self.fix_states(out, true, self.model.n_states);
+        fix_states(out, true, self.model.n_states);
         for v in &self.visits {
             let states = if v.states.is_empty() { "[]".to_string() } else { format!("x[{}]", range(&v.states)) };
             let _ = writeln!(out, "        self.b{}.initialize(&mut {states});", v.index);
@@ -184,7 +184,7 @@ impl<'m> Gen<'m> {
         out.push_str(
             "    #[allow(unused_variables)]\n    fn outputs(&mut self, t: f64, x: &[f64], first: bool, all: bool, hit: &[bool]) {\n",
         );
-        self.fix_states(out, false, self.model.n_states);
+        fix_states(out, false, self.model.n_states);
         self.fix_hits(out);
         bind_signals(out);
         for v in &self.visits {
@@ -230,7 +230,7 @@ impl<'m> Gen<'m> {
     /// The update sweep: continuous blocks always, discrete ones at hits.
     fn updates(&self, out: &mut String) {
         out.push_str("    #[allow(unused_variables)]\n    fn updates(&mut self, t: f64, x: &[f64], hit: &[bool]) {\n");
-        self.fix_states(out, false, self.model.n_states);
+        fix_states(out, false, self.model.n_states);
         self.fix_hits(out);
         bind_signals(out);
         for v in self.visits.iter().filter(|v| v.updates) {
@@ -259,7 +259,7 @@ impl<'m> Gen<'m> {
             "    }\n\n    #[allow(unused_variables)]\n    fn step_held(&mut self, dt: f64, x: &mut [f64]) {\n",
         );
         if !self.held.is_empty() {
-            self.fix_states(out, true, self.model.n_states);
+            fix_states(out, true, self.model.n_states);
         }
         for (j, (i, _)) in self.held.iter().enumerate() {
             let _ =
@@ -276,7 +276,7 @@ impl<'m> Gen<'m> {
         );
         let n = m.between.n_integrated;
         if n > 0 {
-            self.fix_states(out, false, n);
+            fix_states(out, false, n);
             let _ = writeln!(out, "        let dx: &mut [f64; {n}] = cg::fixed_mut(dx);");
         }
         bind_signals(out);
@@ -298,22 +298,13 @@ impl<'m> Gen<'m> {
     fn clamp_states(&self, out: &mut String) {
         out.push_str("    #[allow(unused_variables)]\n    fn clamp_states(&mut self, x: &mut [f64]) -> bool {\n");
         if !self.model.between.integrated.is_empty() {
-            self.fix_states(out, true, self.model.between.n_integrated);
+            fix_states(out, true, self.model.between.n_integrated);
         }
         out.push_str("        false");
         for &i in &self.model.between.integrated {
             let _ = write!(out, "\n            | self.b{i}.clamp_states(&mut x[{}])", range(&self.visits[i].states));
         }
         out.push_str("\n    }\n\n");
-    }
-
-    /// Rebinds `x` as an array of `n` states, so that the sweep's constant
-    /// ranges of it are not bounds-checked.
-    fn fix_states(&self, out: &mut String, writable: bool, n: usize) {
-        let _ = match writable {
-            true => writeln!(out, "        let x: &mut [f64; {n}] = cg::fixed_mut(x);"),
-            false => writeln!(out, "        let x: &[f64; {n}] = cg::fixed(x);"),
-        };
     }
 
     /// Rebinds `hit` as an array of one flag per clock (when a sweep
@@ -341,6 +332,15 @@ impl<'m> Gen<'m> {
         }
         out.push_str("            _ => None,\n        }\n    }\n");
     }
+}
+
+/// Rebinds `x` as an array of `n` states, so that the sweep's constant
+/// ranges of it are not bounds-checked.
+fn fix_states(out: &mut String, writable: bool, n: usize) {
+    let _ = match writable {
+        true => writeln!(out, "        let x: &mut [f64; {n}] = cg::fixed_mut(x);"),
+        false => writeln!(out, "        let x: &[f64; {n}] = cg::fixed(x);"),
+    };
 }
 
 /// Binds `s` to the signal buffer for a sweep. Its address then sits in

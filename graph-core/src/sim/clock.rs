@@ -53,11 +53,14 @@ impl Clock {
         self.next = self.offset + self.grid.time(tick);
     }
 
-    /// Moves past the hits at or before `t` (within `tol`).
-    pub(crate) fn pass(&mut self, t: f64, tol: f64) {
+    /// Moves past the hits at or before `t` (within `tol`); returns
+    /// whether there was one.
+    pub(crate) fn pass(&mut self, t: f64, tol: f64) -> bool {
+        let due = self.next <= t + tol;
         while self.next <= t + tol {
             self.set_tick(self.tick + 1);
         }
+        due
     }
 }
 
