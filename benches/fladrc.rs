@@ -253,7 +253,7 @@ fn compiled<G: GeneratedStep>((run, y): &mut (Compiled<G>, usize)) -> (f64, f64)
     run.reset();
     let mut sink = 0.0;
     let mut last = 0.0;
-    run.run(&mut |_, s| {
+    run.run(|_, s| {
         sink += s[*y];
         last = s[*y];
     })

@@ -76,6 +76,28 @@ fn generated_time_keeping_equals_the_interpreters_on_and_off_the_grid() {
 }
 
 #[test]
+fn a_generated_step_whose_signal_overflows_stops_as_the_interpreter_does_and_stays_stopped() {
+    const PATH: &str = "compiled/graphs/clocks.yaml";
+    let sets = [("kick", "1e300"), ("kick_gain", "1e300")].map(|(k, v)| (k.to_string(), v.to_string()));
+    let model = || compile_file(Path::new(PATH), &sets).unwrap();
+    let expected = Simulator::new(model(), None).run(&mut |_, _| {}).unwrap_err().to_string();
+    assert!(expected.contains("block `scale`") && expected.contains("inf"), "{expected}");
+    let mut run = Compiled::<compiled_graphs_clocks::Step>::new(&model(), None).unwrap();
+    let error = loop {
+        if let Err(e) = run.outputs() {
+            break e.to_string();
+        }
+        run.advance().unwrap();
+    };
+    assert_eq!(error, expected);
+    // The infinite signal is not written again, yet it is still there:
+    // the next step says so too (at its own time).
+    run.advance().unwrap();
+    let again = run.outputs().unwrap_err().to_string();
+    assert_eq!(again.split_once(": ").map(|(_, what)| what), expected.split_once(": ").map(|(_, what)| what));
+}
+
+#[test]
 fn the_papers_fixed_step_loops_are_generated_and_the_rest_refused_with_a_reason() {
     let generated: Vec<&str> = GENERATED.iter().map(|(p, _)| *p).collect();
     for path in ["graphs/fladrc/ladrc.yaml", "graphs/fladrc/fladrc.yaml", "benches/pid_loop_rk4.yaml"] {

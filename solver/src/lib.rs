@@ -18,4 +18,4 @@ pub mod zoh;
 pub use cascade::factored_tf2ss;
 pub use lti::{StateSpace, tf2ss, zpk2tf};
 pub use ode::{Integrator, Method, OdeSystem, SolverError, Stats};
-pub use zoh::Zoh;
+pub use zoh::{Zoh, ZohSingleInput};

@@ -112,6 +112,12 @@ impl Zoh {
         }
     }
 
+    /// This system as one of `N` states and one input, stepped without
+    /// dispatching on its sizes; `None` when those are not its sizes.
+    pub fn single_input<const N: usize>(self) -> Option<ZohSingleInput<N>> {
+        (self.ss.n == N && self.ss.m == 1 && N > 0).then_some(ZohSingleInput(self))
+    }
+
     /// Φ(dt) and Γ(dt) as (n×n, n×m) row-major matrices.
     pub fn matrices(&mut self, dt: f64) -> (&[f64], &[f64]) {
         let slot = self.transition(dt);
@@ -201,7 +207,28 @@ fn multiply(a: &[f64], b: &[f64], c: &mut [f64], k: usize) {
     }
 }
 
+/// A [`Zoh`] whose sizes, N states and one input, were checked once
+/// ([`Zoh::single_input`]), so that a step dispatches on nothing: for
+/// generated code, which knows each block's sizes when it is written.
+#[derive(Clone, Debug)]
+pub struct ZohSingleInput<const N: usize>(Zoh);
+
+impl<const N: usize> ZohSingleInput<N> {
+    /// `x ← Φ(dt)·x + Γ(dt)·u`, as [`Zoh::step`].
+    #[inline]
+    pub fn step(&mut self, dt: f64, x: &mut [f64; N], u: f64) {
+        let slot = self.0.transition(dt);
+        let Transition { phi, gamma, .. } = &self.0.cache[slot];
+        step_single_input::<N>(phi, gamma, x, u);
+    }
+
+    pub fn zoh(&self) -> &Zoh {
+        &self.0
+    }
+}
+
 /// `x ← Φ·x + γ·u` for N states and one input (see [`affine_single_input`]).
+#[inline]
 fn step_single_input<const N: usize>(phi: &[f64], gamma: &[f64], x: &mut [f64], u: f64) {
     let next = affine_single_input::<N>(phi, gamma, x, u, 0.0);
     x[..N].copy_from_slice(&next);
@@ -317,6 +344,25 @@ mod tests {
                 assert_eq!(x, want, "order {order}, step {k}");
             }
         }
+    }
+
+    #[test]
+    fn a_single_input_zoh_steps_as_the_general_one_and_checks_its_sizes() {
+        let ss = tf2ss(&[2.0, 1.0], &[1.0, 7.0, 19.0, 25.0]).unwrap();
+        let mut general = Zoh::new(ss.clone());
+        let mut sized = Zoh::new(ss.clone()).single_input::<3>().expect("3 states, one input");
+        let (mut x, mut x_sized) = ([0.3, -0.1, 0.2], [0.3, -0.1, 0.2]);
+        // The grid's step and an event's, alternating through the cache.
+        for k in 0..20 {
+            let (dt, u) = (if k % 5 == 4 { 0.004 } else { 0.01 }, (k as f64 * 0.7).sin());
+            general.step(dt, &mut x, &[u]);
+            sized.step(dt, &mut x_sized, u);
+            assert_eq!(x, x_sized, "step {k}");
+        }
+        assert_eq!(sized.zoh().exponentials_computed(), general.exponentials_computed());
+        assert!(Zoh::new(ss.clone()).single_input::<2>().is_none(), "3 states are not 2");
+        let two_inputs = StateSpace::new(vec![vec![-1.0]], vec![vec![1.0, 2.0]], vec![vec![1.0]], vec![vec![0.0, 0.0]]);
+        assert!(Zoh::new(two_inputs.unwrap()).single_input::<1>().is_none(), "two inputs are not one");
     }
 
     /// The FLADRC paper's plant 1.639e4/(s² + 154.8 s + 2.242e4) under a unit

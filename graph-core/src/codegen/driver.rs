@@ -5,7 +5,7 @@
 use crate::block::{Kernel, Port};
 use crate::compile::{BlockMeta, Model};
 use crate::sim::{self, Blame, OnGrid, RunStats, SimError, Timing};
-use ctlgraph_solver::{Integrator, OdeSystem, Zoh};
+use ctlgraph_solver::{Integrator, OdeSystem, Zoh, ZohSingleInput};
 
 /// What `ctlgraph codegen` writes for a graph: its sweeps unrolled over
 /// the graph's blocks. Implemented by generated code only; the methods are
@@ -16,14 +16,13 @@ pub trait GeneratedStep: Sized {
     /// Takes the blocks, with their parameters, from a model of that structure.
     fn from_model(model: &Model) -> Result<Self, String>;
     fn signals(&self) -> &[f64];
-    /// Whether every signal is finite ([`all_finite`] on the buffer, its
-    /// length known to the compiler).
-    fn signals_finite(&self) -> bool;
     fn signals_mut(&mut self) -> &mut [f64];
     fn initialize(&mut self, x: &mut [f64]);
     /// The output sweep: `first` on the first pass, `all` when every block
-    /// runs (first pass, block events), `hit` per clock.
-    fn outputs(&mut self, t: f64, x: &[f64], first: bool, all: bool, hit: &[bool]);
+    /// runs (first pass, block events), `hit` per clock. Returns whether
+    /// every value it wrote is finite ([`super::not_finite_bits`] of each block's
+    /// outputs as it writes them).
+    fn outputs(&mut self, t: f64, x: &[f64], first: bool, all: bool, hit: &[bool]) -> bool;
     fn updates(&mut self, t: f64, x: &[f64], hit: &[bool]);
     /// Latches the held LTI blocks' inputs at a major step.
     fn hold_inputs(&mut self);
@@ -48,19 +47,18 @@ pub fn transition(model: &Model, index: usize) -> Result<Zoh, String> {
     Ok(Zoh::new(lti.clone()))
 }
 
+/// [`transition`] of a block of `N` states and one input, stepped at
+/// those sizes.
+pub fn transition_single_input<const N: usize>(model: &Model, index: usize) -> Result<ZohSingleInput<N>, String> {
+    transition(model, index)?.single_input::<N>().ok_or_else(|| mismatch(model, index))
+}
+
 /// The error for a block that is not what the generated code expects.
 pub fn mismatch(model: &Model, index: usize) -> String {
     match model.meta.get(index) {
         Some(m) => format!("block `{}` ({}) is not the block the generated step was made for", m.name, m.type_name),
         None => format!("the model has no block {index}, which the generated step expects"),
     }
-}
-
-/// Whether every value is finite (the simulator's check, one branch for
-/// the whole buffer).
-#[inline]
-pub fn all_finite(values: &[f64]) -> bool {
-    sim::all_finite(values)
 }
 
 /// `values` (a run's states or clock hits) as an array of the length the
@@ -93,12 +91,16 @@ pub struct Compiled<G: GeneratedStep> {
     x: Vec<f64>,
     integ: Integrator,
     timing: Timing,
+    /// The method's largest step (kept: asking the method is a `match`).
+    max_step: f64,
     /// The clocks counted in grid steps, when they all fall on the grid.
     on_grid: Option<OnGrid>,
     hit: Vec<bool>,
     t: f64,
     stop: f64,
     first: bool,
+    /// Whether every signal was finite after the last output sweep.
+    all_finite: bool,
     at_event: bool,
     next_event: f64,
     n_integrated: usize,
@@ -144,10 +146,12 @@ impl<G: GeneratedStep> Compiled<G> {
             integ: Integrator::new(timing.method, model.between.n_integrated),
             hit: vec![false; timing.clocks.len()],
             on_grid: OnGrid::new(&timing),
+            max_step: timing.method.max_step(),
             timing,
             t: 0.0,
             stop,
             first: true,
+            all_finite: true,
             at_event: true,
             next_event: f64::INFINITY,
             n_integrated: model.between.n_integrated,
@@ -164,6 +168,7 @@ impl<G: GeneratedStep> Compiled<G> {
     pub fn reset(&mut self) {
         self.t = 0.0;
         self.first = true;
+        self.all_finite = true;
         self.at_event = true;
         self.major_steps = 0;
         self.timing.grid.set_tick(1);
@@ -220,13 +225,18 @@ impl<G: GeneratedStep> Compiled<G> {
 
     /// Step (1) of a major step: outputs in execution order, then a check
     /// that every signal is finite.
+    /// The step checks what it writes; signals it did not write this time
+    /// were checked when they were, unless a step found one not finite.
     pub fn outputs(&mut self) -> Result<(), SimError> {
         let all = self.first || self.at_event;
-        self.step.outputs(self.t, &self.x, self.first, all, &self.hit);
+        let wrote_finite = self.step.outputs(self.t, &self.x, self.first, all, &self.hit);
         self.first = false;
-        if !self.step.signals_finite() {
-            let step = &self.step;
-            return Err(self.blame().signal(step.signals(), self.t, |i| step.diagnose(i)));
+        if !(wrote_finite && self.all_finite) {
+            self.all_finite = sim::all_finite(self.step.signals());
+            if !self.all_finite {
+                let step = &self.step;
+                return Err(self.blame().signal(step.signals(), self.t, |i| step.diagnose(i)));
+            }
         }
         Ok(())
     }
@@ -244,7 +254,7 @@ impl<G: GeneratedStep> Compiled<G> {
         let t0 = self.t;
         let x = &mut self.x[..self.n_integrated];
         let t_new = if x.is_empty() {
-            target.min(t0 + self.timing.method.max_step())
+            target.min(t0 + self.max_step)
         } else {
             let mut stage = Stage { step: &mut self.step, t_end: target };
             match self.integ.advance(&mut stage, t0, target, x) {
@@ -293,7 +303,9 @@ impl<G: GeneratedStep> Compiled<G> {
 
     /// Runs to the stop time, handing the signals to `sink` at every major
     /// step (including t = 0 and the stop time), as [`crate::Simulator::run`].
-    pub fn run(&mut self, sink: &mut dyn FnMut(f64, &[f64])) -> Result<RunStats, SimError> {
+    /// The sink is a type parameter, not a `dyn` call: it inlines into the
+    /// loop, which then keeps its values in registers across it.
+    pub fn run(&mut self, mut sink: impl FnMut(f64, &[f64])) -> Result<RunStats, SimError> {
         loop {
             self.outputs()?;
             sink(self.t, self.step.signals());

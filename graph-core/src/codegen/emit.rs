@@ -98,8 +98,12 @@ impl<'m> Gen<'m> {
             let _ = writeln!(out, "    /// `{}` ({})", meta.name.escape_debug(), meta.type_name.escape_debug());
             let _ = writeln!(out, "    b{}: {},", v.index, field_type(m, v.index));
         }
-        for (j, (_, input)) in self.held.iter().enumerate() {
-            let _ = writeln!(out, "    z{j}: Zoh,\n    u{j}: [f64; {}],", input.width);
+        for (j, &(i, input)) in self.held.iter().enumerate() {
+            let zoh = match self.single_input_states(i, input) {
+                Some(n) => format!("cg::ZohSingleInput<{n}>"),
+                None => "Zoh".into(),
+            };
+            let _ = writeln!(out, "    z{j}: {zoh},\n    u{j}: [f64; {}],", input.width);
         }
         out.push_str("}\n\n");
     }
@@ -109,7 +113,6 @@ impl<'m> Gen<'m> {
         self.constructor(out);
         out.push_str(
             "    fn signals(&self) -> &[f64] {\n        &*self.s\n    }\n\n\
-             \x20   fn signals_finite(&self) -> bool {\n        cg::all_finite(&*self.s)\n    }\n\n\
              \x20   fn signals_mut(&mut self) -> &mut [f64] {\n        &mut *self.s\n    }\n\n",
         );
         self.initialize(out);
@@ -158,12 +161,13 @@ impl<'m> Gen<'m> {
             };
             let _ = writeln!(out, "            b{i}: {take}.ok_or_else(|| cg::mismatch(model, {i}))?,");
         }
-        for (j, (i, input)) in self.held.iter().enumerate() {
-            let _ = writeln!(
-                out,
-                "            z{j}: cg::transition(model, {i})?,\n            u{j}: [0.0; {}],",
-                input.width
-            );
+        for (j, &(i, input)) in self.held.iter().enumerate() {
+            let take = match self.single_input_states(i, input) {
+                Some(_) => "transition_single_input",
+                None => "transition",
+            };
+            let _ =
+                writeln!(out, "            z{j}: cg::{take}(model, {i})?,\n            u{j}: [0.0; {}],", input.width);
         }
         out.push_str("        })\n    }\n\n");
     }
@@ -182,11 +186,12 @@ impl<'m> Gen<'m> {
     /// event-only blocks when every block runs, discrete ones at hits.
     fn outputs(&self, out: &mut String) {
         out.push_str(
-            "    #[allow(unused_variables)]\n    fn outputs(&mut self, t: f64, x: &[f64], first: bool, all: bool, hit: &[bool]) {\n",
+            "    #[allow(unused_variables)]\n    #[inline]\n    fn outputs(&mut self, t: f64, x: &[f64], first: bool, all: bool, hit: &[bool]) -> bool {\n",
         );
         fix_states(out, false, self.model.n_states);
         self.fix_hits(out);
         bind_signals(out);
+        out.push_str("        let mut bad = 0u64;\n");
         for v in &self.visits {
             let due = match v.rate {
                 Rate::Constant => "first".to_string(),
@@ -196,13 +201,26 @@ impl<'m> Gen<'m> {
                 Rate::Discrete(c) => format!("hit[{c}]"),
             };
             let call = self.output_call(v, "false", false);
+            let check = self.check_written(v.index);
             if due.is_empty() {
-                let _ = writeln!(out, "        {call}");
+                let _ = writeln!(out, "        {call}\n        {check}");
             } else {
-                let _ = writeln!(out, "        if {due} {{\n            {call}\n        }}");
+                let _ = writeln!(out, "        if {due} {{\n            {call}\n            {check}\n        }}");
             }
         }
-        out.push_str("    }\n\n");
+        out.push_str("        bad == 0\n    }\n\n");
+    }
+
+    /// Adds the non-finite bits of what block `i` just wrote to `bad`:
+    /// read right after the write, so the compiler takes the values from
+    /// the registers that hold them instead of loading them back (a
+    /// vector load of two values just stored one by one waits for both
+    /// stores to retire).
+    fn check_written(&self, i: usize) -> String {
+        let ports = &self.model.out_ports[self.model.slots[i].outputs.clone()];
+        let ranges =
+            ports.iter().map(|p| format!("bad |= cg::not_finite_bits(&s[{}..{}]);", p.offset, p.offset + p.width));
+        ranges.collect::<Vec<_>>().join(" ")
     }
 
     /// Block `v`'s output: its kernel in place, or a call through a view.
@@ -229,7 +247,7 @@ impl<'m> Gen<'m> {
 
     /// The update sweep: continuous blocks always, discrete ones at hits.
     fn updates(&self, out: &mut String) {
-        out.push_str("    #[allow(unused_variables)]\n    fn updates(&mut self, t: f64, x: &[f64], hit: &[bool]) {\n");
+        out.push_str("    #[allow(unused_variables)]\n    #[inline]\n    fn updates(&mut self, t: f64, x: &[f64], hit: &[bool]) {\n");
         fix_states(out, false, self.model.n_states);
         self.fix_hits(out);
         bind_signals(out);
@@ -251,21 +269,31 @@ impl<'m> Gen<'m> {
     /// Held LTI blocks: their inputs latched at the major step, their
     /// states advanced by the exact transition.
     fn held(&self, out: &mut String) {
-        out.push_str("    fn hold_inputs(&mut self) {\n");
+        out.push_str("    #[inline]\n    fn hold_inputs(&mut self) {\n");
         for (j, (_, p)) in self.held.iter().enumerate() {
             let _ = writeln!(out, "        self.u{j}.copy_from_slice(&self.s[{}..{}]);", p.offset, p.offset + p.width);
         }
         out.push_str(
-            "    }\n\n    #[allow(unused_variables)]\n    fn step_held(&mut self, dt: f64, x: &mut [f64]) {\n",
+            "    }\n\n    #[allow(unused_variables)]\n    #[inline]\n    fn step_held(&mut self, dt: f64, x: &mut [f64]) {\n",
         );
         if !self.held.is_empty() {
             fix_states(out, true, self.model.n_states);
         }
-        for (j, (i, _)) in self.held.iter().enumerate() {
-            let _ =
-                writeln!(out, "        self.z{j}.step(dt, &mut x[{}], &self.u{j});", range(&self.visits[*i].states));
+        for (j, &(i, input)) in self.held.iter().enumerate() {
+            let states = range(&self.visits[i].states);
+            let _ = match self.single_input_states(i, input) {
+                Some(_) => writeln!(out, "        self.z{j}.step(dt, cg::fixed_mut(&mut x[{states}]), self.u{j}[0]);"),
+                None => writeln!(out, "        self.z{j}.step(dt, &mut x[{states}], &self.u{j});"),
+            };
         }
         out.push_str("    }\n\n");
+    }
+
+    /// The state count of held block `i` when it has one input and some
+    /// states: its transition is then stepped at sizes fixed in the code.
+    fn single_input_states(&self, i: usize, input: Port) -> Option<usize> {
+        let n = self.visits[i].states.len();
+        (input.width == 1 && n > 0).then_some(n)
     }
 
     /// A solver stage: the minor step's outputs, then the derivatives.

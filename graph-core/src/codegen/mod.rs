@@ -19,8 +19,11 @@ mod driver;
 mod emit;
 
 use crate::compile::Model;
-pub use ctlgraph_solver::Zoh;
-pub use driver::{Compiled, GeneratedStep, all_finite, fixed, fixed_mut, kernel, mismatch, transition, zeros};
+pub use crate::sim::not_finite_bits;
+pub use ctlgraph_solver::{Zoh, ZohSingleInput};
+pub use driver::{
+    Compiled, GeneratedStep, fixed, fixed_mut, kernel, mismatch, transition, transition_single_input, zeros,
+};
 
 /// Why a model cannot be generated: one sentence per reason.
 pub fn refusals(model: &Model) -> Vec<String> {

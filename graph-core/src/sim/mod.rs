@@ -449,14 +449,22 @@ fn due(rate: Rate, clocks: &[Clock], constant_too: bool) -> bool {
     }
 }
 
-/// Whether every value is finite, without a branch per value: ±inf and
-/// NaN are the values whose exponent bits are all ones. Integer ops of
-/// one cycle each, independent per value (the compiler vectorises them),
-/// where a floating-point sum would chain one addition's latency to the next.
+/// Whether every value is finite, without a branch per value.
 #[inline]
 pub(crate) fn all_finite(values: &[f64]) -> bool {
-    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
-    values.iter().fold(0u64, |bad, v| bad | u64::from(v.to_bits() & EXPONENT == EXPONENT)) == 0
+    not_finite_bits(values) == 0
+}
+
+/// Zero exactly when every value is finite: v − v is +0 (all bits clear)
+/// for a finite v and NaN for ±inf and NaN, and the bits are OR-ed
+/// together. One subtraction and one OR per value, independent per value,
+/// where a floating-point sum would chain one addition's latency to the
+/// next. Generated steps OR these bits over each block's outputs as it
+/// writes them ([`crate::codegen::GeneratedStep::outputs`]).
+#[inline(always)]
+#[allow(clippy::eq_op)] // v − v is the test, not a mistake
+pub fn not_finite_bits(values: &[f64]) -> u64 {
+    values.iter().fold(0, |bad, &v| bad | (v - v).to_bits())
 }
 
 pub(crate) fn io_for<'a>(
