@@ -245,7 +245,14 @@ impl Leso {
     /// its bounds checks (tested bit for bit).
     #[inline]
     pub fn step(&mut self, y: f64, u: f64) {
-        match self.z.len() {
+        self.step_sized(self.z.len(), y, u);
+    }
+
+    /// [`Leso::step`] for an observer of `n` = order + 1 states (a
+    /// mismatch takes the general loop).
+    #[inline]
+    fn step_sized(&mut self, n: usize, y: f64, u: f64) {
+        match n {
             2 => self.step_fixed::<2>(y, u),
             3 => self.step_fixed::<3>(y, u),
             4 => self.step_fixed::<4>(y, u),
@@ -311,15 +318,18 @@ impl Block for Leso {
         self.z.copy_from_slice(&self.initial);
         x0.copy_from_slice(if self.h > 0.0 { &[] } else { &self.initial[..] });
     }
+    /// Discrete (h > 0) exactly when the block has no continuous states,
+    /// and its order is its output's width less one: both asked of the
+    /// view, where a generated step knows them (see [`Io::output_width`]).
     #[inline(always)]
     fn output(&mut self, io: &mut Io) {
-        let z = if self.h > 0.0 { &self.z[..] } else { io.x };
+        let z = if io.x.is_empty() { &self.z[..] } else { io.x };
         io.set_all(0, z);
     }
     #[inline(always)]
     fn update(&mut self, io: &mut Io) {
-        if self.h > 0.0 {
-            self.step(io.u(0), io.u(1));
+        if io.x.is_empty() {
+            self.step_sized(io.output_width(0), io.u(0), io.u(1));
         }
     }
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {

@@ -292,6 +292,11 @@ impl<'a> Io<'a> {
         self.outputs.len()
     }
 
+    /// The width of output `port`. Like every part of the view's
+    /// structure (port widths, `x.len()`), a constant in a generated step
+    /// once the block's method is inlined there: a block that branches on
+    /// these rather than on its own fields has the branch removed.
+    #[inline]
     pub fn output_width(&self, port: usize) -> usize {
         self.outputs[port].width
     }
