@@ -11,8 +11,10 @@ use ctlgraph_core::codegen::Compiled;
 use ctlgraph_core::{Model, Simulator};
 use std::path::Path;
 
-/// Major steps compared per graph (the whole run when it is shorter).
-const STEPS: usize = 3_000;
+/// Major steps compared per graph (the whole run when it is shorter): the
+/// whole LADRC and FLADRC scenarios (20 001, through their events, where
+/// the generated step's grid-point path meets a block event).
+const STEPS: usize = 25_000;
 
 fn interpreted(path: &str) -> Vec<(f64, Vec<f64>)> {
     interpreted_with(compile_file(Path::new(path), &[]).unwrap())

@@ -250,6 +250,12 @@ impl<G: GeneratedStep> Compiled<G> {
     pub fn advance(&mut self) -> Result<(), SimError> {
         self.step.updates(self.t, &self.x, &self.hit);
         self.step.hold_inputs();
+        if self.on_grid.is_some() && self.n_integrated == 0 {
+            let next = self.timing.grid.next;
+            if next <= self.stop && self.next_event > next + self.timing.tol {
+                return self.advance_to_grid_point(next);
+            }
+        }
         let target = self.next_major_time();
         let t0 = self.t;
         let x = &mut self.x[..self.n_integrated];
@@ -281,14 +287,38 @@ impl<G: GeneratedStep> Compiled<G> {
         if hit || block_event || clamped {
             self.integ.invalidate();
         }
-        if !sim::all_finite(&self.x) {
-            return Err(self.blame().state(self.step.signals(), self.t, &self.x));
-        }
+        self.check_states()?;
         if self.t <= t0 {
             return Err(SimError::Stalled { t: t0, block: "?".into() });
         }
         self.major_steps += 1;
         Ok(())
+    }
+
+    /// [`Self::advance`]'s steps after the updates, where they are known to
+    /// end at the grid's next point `next`: nothing is integrated (held LTI
+    /// blocks are stepped exactly), the clocks are on the grid, and neither
+    /// the stop time nor a block event comes first. The general path then
+    /// takes `next` as the major step's time (the integrator's candidate
+    /// t0 + h differs from it by rounding only), marks the grid and the
+    /// clocks passed, and sees no event; here those same results are set
+    /// without computing and comparing the candidates.
+    fn advance_to_grid_point(&mut self, next: f64) -> Result<(), SimError> {
+        let t0 = self.t;
+        self.t = next;
+        self.step.step_held(next - t0, &mut self.x);
+        self.timing.grid.pass_one();
+        if let Some(clocks) = &mut self.on_grid {
+            clocks.mark_hits(true, &mut self.hit);
+        }
+        self.at_event = false;
+        self.check_states()?;
+        self.major_steps += 1;
+        Ok(())
+    }
+
+    fn check_states(&self) -> Result<(), SimError> {
+        if sim::all_finite(&self.x) { Ok(()) } else { Err(self.blame().state(self.step.signals(), self.t, &self.x)) }
     }
 
     /// The next major step's time, as the simulator decides it.

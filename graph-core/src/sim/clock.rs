@@ -53,6 +53,13 @@ impl Clock {
         self.next = self.offset + self.grid.time(tick);
     }
 
+    /// Moves to the next hit, when the step has reached this one (as
+    /// [`Clock::pass`] at a time within `tol` of `next`, not of the one after).
+    #[inline]
+    pub(crate) fn pass_one(&mut self) {
+        self.set_tick(self.tick + 1);
+    }
+
     /// Moves past the hits at or before `t` (within `tol`); returns
     /// whether there was one.
     pub(crate) fn pass(&mut self, t: f64, tol: f64) -> bool {
@@ -167,11 +174,16 @@ impl OnGrid {
     /// whether any was due.
     #[inline]
     pub(crate) fn mark_hits(&mut self, on_grid: bool, hit: &mut [bool]) -> bool {
+        if !on_grid {
+            hit.fill(false);
+            return false;
+        }
         let mut any = false;
         for ((left, &every), hit) in self.left.iter_mut().zip(&self.every).zip(hit) {
-            *hit = on_grid && *left == 1;
-            if on_grid {
-                *left = if *hit { every } else { *left - 1 };
+            *left -= 1;
+            *hit = *left == 0;
+            if *hit {
+                *left = every;
             }
             any |= *hit;
         }
