@@ -205,9 +205,11 @@ impl Block for Lti {
     fn initialize(&mut self, x0: &mut [f64]) {
         x0.copy_from_slice(&self.x0);
     }
+    /// Sizes are asked of the view (its widths and `x.len()`), where a
+    /// generated step knows them (see [`Io::output_width`]).
     #[inline(always)]
     fn output(&mut self, io: &mut Io) {
-        if !self.feedthrough && self.y.len() == 1 {
+        if !self.feedthrough && io.output_width(0) == 1 {
             // A transfer function: y = C·x straight to the port (the
             // common case, kept free of the general case's registers).
             return io.set(0, self.ss.output_state_only_scalar(io.x));
@@ -217,7 +219,7 @@ impl Block for Lti {
     }
     #[inline(always)]
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
-        if self.ss.m == 1 {
+        if io.input_width(0) == 1 {
             return self.ss.derivative_single_input(io.x, io.u(0), dx);
         }
         self.derivatives_general(io.x, io.input(0), dx);

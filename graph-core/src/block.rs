@@ -256,6 +256,7 @@ impl<'a> Io<'a> {
         self.inputs.len()
     }
 
+    #[inline]
     pub fn input_width(&self, port: usize) -> usize {
         self.inputs[port].width
     }

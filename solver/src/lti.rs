@@ -103,11 +103,13 @@ impl StateSpace {
     }
 
     /// [`StateSpace::derivative`] of a single-input system, u a number (the
-    /// same sums: Σ over one term is that term).
+    /// same sums: Σ over one term is that term). `x` holds exactly the n
+    /// states (dispatched on as in [`StateSpace::output_state_only_scalar`]).
     #[inline(always)]
     pub fn derivative_single_input(&self, x: &[f64], u: f64, dx: &mut [f64]) {
+        debug_assert_eq!(x.len(), self.n, "x holds the n states");
         let (a, b) = (&self.a, &self.b);
-        match self.n {
+        match x.len() {
             1 => dx[..1].copy_from_slice(&affine_single_input::<1>(a, b, x, u, -0.0)),
             2 => dx[..2].copy_from_slice(&affine_single_input::<2>(a, b, x, u, -0.0)),
             3 => dx[..3].copy_from_slice(&affine_single_input::<3>(a, b, x, u, -0.0)),
@@ -143,15 +145,18 @@ impl StateSpace {
         }
     }
 
-    /// [`StateSpace::output_state_only`] of a single-output system.
+    /// [`StateSpace::output_state_only`] of a single-output system. `x`
+    /// holds exactly the n states: the sizes' dispatch is on `x.len()`, a
+    /// constant where the caller knows it (a generated step).
     #[inline(always)]
     pub fn output_state_only_scalar(&self, x: &[f64]) -> f64 {
-        match self.n {
+        debug_assert_eq!(x.len(), self.n, "x holds the n states");
+        match x.len() {
             1 => dot::<1>(&self.c, x),
             2 => dot::<2>(&self.c, x),
             3 => dot::<3>(&self.c, x),
             4 => dot::<4>(&self.c, x),
-            n => row_times(&self.c, n, 0, x),
+            _ => row_times(&self.c, self.n, 0, x),
         }
     }
 }
