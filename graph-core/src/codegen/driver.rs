@@ -225,8 +225,10 @@ impl<G: GeneratedStep> Compiled<G> {
 
     /// Step (1) of a major step: outputs in execution order, then a check
     /// that every signal is finite.
+    ///
     /// The step checks what it writes; signals it did not write this time
-    /// were checked when they were, unless a step found one not finite.
+    /// were checked when they were, unless a step found one not finite
+    /// (then the whole buffer is checked again at every step).
     pub fn outputs(&mut self) -> Result<(), SimError> {
         let all = self.first || self.at_event;
         let wrote_finite = self.step.outputs(self.t, &self.x, self.first, all, &self.hit);
