@@ -119,6 +119,7 @@ impl Zoh {
     }
 
     /// Φ(dt) and Γ(dt) as (n×n, n×m) row-major matrices.
+    #[inline]
     pub fn matrices(&mut self, dt: f64) -> (&[f64], &[f64]) {
         let slot = self.transition(dt);
         (&self.cache[slot].phi, &self.cache[slot].gamma)
@@ -217,8 +218,7 @@ impl<const N: usize> ZohSingleInput<N> {
     /// `x ← Φ(dt)·x + Γ(dt)·u`, as [`Zoh::step`].
     #[inline]
     pub fn step(&mut self, dt: f64, x: &mut [f64; N], u: f64) {
-        let slot = self.0.transition(dt);
-        let Transition { phi, gamma, .. } = &self.0.cache[slot];
+        let (phi, gamma) = self.0.matrices(dt);
         step_single_input::<N>(phi, gamma, x, u);
     }
 

@@ -91,8 +91,6 @@ pub struct Compiled<G: GeneratedStep> {
     x: Vec<f64>,
     integ: Integrator,
     timing: Timing,
-    /// The method's largest step (kept: asking the method is a `match`).
-    max_step: f64,
     /// The clocks counted in grid steps, when they all fall on the grid.
     on_grid: Option<OnGrid>,
     hit: Vec<bool>,
@@ -146,7 +144,6 @@ impl<G: GeneratedStep> Compiled<G> {
             integ: Integrator::new(timing.method, model.between.n_integrated),
             hit: vec![false; timing.clocks.len()],
             on_grid: OnGrid::new(&timing),
-            max_step: timing.method.max_step(),
             timing,
             t: 0.0,
             stop,
@@ -262,7 +259,7 @@ impl<G: GeneratedStep> Compiled<G> {
         let t0 = self.t;
         let x = &mut self.x[..self.n_integrated];
         let t_new = if x.is_empty() {
-            target.min(t0 + self.max_step)
+            target.min(t0 + self.timing.method.max_step())
         } else {
             let mut stage = Stage { step: &mut self.step, t_end: target };
             match self.integ.advance(&mut stage, t0, target, x) {
