@@ -44,47 +44,15 @@ pub(super) fn centroid_on_grid(mu: &[f64], range: Range<usize>, lo: f64, hi: f64
         moment += index[k] * v;
     }
     // Σ j·μ_j with j = from + local index.
-    let sums = Sums { s0: sum, s1: from * sum + moment, first: first_value, last: last_value };
-    sums.centroid(lo, hi, last as f64)
+    trapezoid_centroid(sum, from * sum + moment, first_value, last_value, lo, hi, last as f64)
 }
 
-/// S0 = Σ μ_j, S1 = Σ j·μ_j and the end samples μ_0, μ_L.
-#[derive(Clone, Copy, Debug, Default)]
-struct Sums {
-    s0: f64,
-    s1: f64,
-    first: f64,
-    last: f64,
-}
-
-impl Sums {
-    /// Adds μ_j = μ_a + δ·(j − a) for j = a … b − 1 (a < b, whole
-    /// numbers), and notes the end samples when the run reaches them (L =
-    /// `last`).
-    fn add(&mut self, a: f64, b: f64, at_a: f64, per_point: f64, last: f64) {
-        let n = b - a;
-        // Σ i and Σ i² over i = 0 … n − 1: exact (whole numbers below 2⁵³,
-        // divisions without remainder) up to n ≈ 200 000, beyond the
-        // block's 100 000 points; past that, rounded to 1e-16.
-        let t1 = 0.5 * n * (n - 1.0);
-        let t2 = t1 * (2.0 * n - 1.0) / 3.0;
-        let sum = n * at_a + per_point * t1;
-        self.s0 += sum;
-        self.s1 += a * sum + at_a * t1 + per_point * t2;
-        if a == 0.0 {
-            self.first = at_a;
-        }
-        if b == last + 1.0 {
-            self.last = at_a + per_point * (n - 1.0);
-        }
-    }
-
-    /// The formula of the module's doc; `None` when the area is zero.
-    fn centroid(&self, lo: f64, hi: f64, last: f64) -> Option<f64> {
-        let moment = self.s1 + self.first / 6.0 - self.last * (last / 2.0 + 1.0 / 6.0);
-        let area = self.s0 - 0.5 * (self.first + self.last);
-        (area > 0.0).then(|| lo + (hi - lo) / last * moment / area)
-    }
+/// The formula of the module's doc from S0 = Σ μ_j, S1 = Σ j·μ_j and the
+/// end samples μ_0, μ_L; `None` when the area is zero.
+fn trapezoid_centroid(s0: f64, s1: f64, first: f64, last: f64, lo: f64, hi: f64, l: f64) -> Option<f64> {
+    let moment = s1 + first / 6.0 - last * (l / 2.0 + 1.0 / 6.0);
+    let area = s0 - 0.5 * (first + last);
+    (area > 0.0).then(|| lo + (hi - lo) / l * moment / area)
 }
 
 /// The exact centroid of an output whose terms are a triangular partition,
@@ -97,16 +65,22 @@ impl Sums {
 /// (min) or scaled (product) by their strengths w_k and w_{k+1}, and
 /// aggregated, μ is linear in s between at most three breakpoints: the two
 /// clipping kinks 1 − w_k and w_{k+1}, and where the falling and the rising
-/// part cross (max aggregation). On a piece μ_j = μ_a + δ·(j − a) for the
-/// grid points j = a … b − 1 it covers, so its contributions to S0 and S1
-/// are sums of i and i² over 0 … n − 1, n = b − a: a handful of operations
-/// per piece instead of a pass over the grid per term. The result equals the
-/// sampled one up to rounding (the grid's samples are the same linear
-/// functions evaluated point by point; tested to 1e-12 of the universe).
+/// part cross (max aggregation). So on a cell's grid points i = 0 … n − 1
+/// μ is α + β·i piece by piece, and a piece's sums Σ μ_i and Σ i·μ_i are
+/// α·Δn + β·ΔT1 and α·ΔT1 + β·ΔT2, with T1(b) = Σ_{i<b} i and T2(b) =
+/// Σ_{i<b} i² at its ends: a handful of operations per piece instead of a
+/// pass over the grid per term. The grid's two end points, which the
+/// trapezoid rule weighs by half, are evaluated apart, in x as `Mf::eval`
+/// does (on an outer peak a term is exactly 0 or 1 there). The result
+/// equals the sampled one up to rounding, relative to the samples (tested
+/// to 1e-12 of the universe, with strengths down to 1e-18).
 #[derive(Clone, Debug)]
 pub(super) struct PartitionCentroid {
     /// Per pair of neighbouring peaks, the cell between them.
     cells: Vec<Cell>,
+    /// The cells holding the grid's first and last points, and s there
+    /// (the trapezoid rule weighs the end samples by half).
+    ends: [(usize, f64); 2],
     /// Index L of the last grid point.
     last: f64,
     lo: f64,
@@ -132,137 +106,215 @@ impl PartitionCentroid {
             } else if p >= v.hi {
                 last + 1.0
             } else {
-                ceil(at(p)).min(last)
+                at(p).ceil().min(last)
             }
         };
+        // The grid's end points are taken apart, in x as `Mf::eval` takes
+        // them: on an outer peak (the usual universe) a term is exactly 0
+        // or 1 there, where s from the grid index is only near it. So the
+        // cells hold the inner points 1 … L − 1.
+        let edges: Vec<(f64, f64)> = peaks.windows(2).map(|p| (first(p[0]), first(p[1]))).collect();
+        let holding = |j: f64, x: f64| {
+            let k = edges.iter().position(|&(a, b)| a <= j && j < b)?;
+            let (p, q) = (peaks[k], peaks[k + 1]);
+            Some((
+                k,
+                if x == p {
+                    0.0
+                } else if x == q {
+                    1.0
+                } else {
+                    (x - p) / (q - p)
+                },
+            ))
+        };
+        let ends = [holding(0.0, v.lo)?, holding(last, v.hi)?];
         let cells = peaks
             .windows(2)
-            .map(|p| Cell {
-                at: at(p[0]),
-                span: at(p[1]) - at(p[0]),
-                per_point: 1.0 / (at(p[1]) - at(p[0])),
-                first: first(p[0]),
-                end: first(p[1]),
+            .zip(edges)
+            .map(|(p, (start, end))| {
+                let (a, span) = (at(p[0]), at(p[1]) - at(p[0]));
+                let (start, end) = (start.max(1.0), end.min(last));
+                let (len, offset, per_point) = ((end - start).max(0.0), start - a, 1.0 / span);
+                let (s_first, len_sums, rises) = (offset * per_point, sums_below(len), len > 0.0 && end - 1.0 > a);
+                Cell { start, len, offset_less_half: offset - 0.5, span, per_point, s_first, len_sums, rises }
             })
             .collect();
-        Some(PartitionCentroid { cells, last, lo: v.lo, hi: v.hi, implication, aggregation })
+        Some(PartitionCentroid { cells, ends, last, lo: v.lo, hi: v.hi, implication, aggregation })
     }
 
     /// The centroid of the aggregate of the terms at `strength` (one per
     /// term); `None` when it is zero everywhere.
     pub(super) fn centroid(&self, strength: &[f64]) -> Option<f64> {
-        let mut sums = Sums::default();
-        for (cell, w) in self.cells.iter().zip(strength.windows(2)) {
-            if w[0] > 0.0 || w[1] > 0.0 {
-                self.add_cell(cell, w[0], w[1], &mut sums);
-            }
-        }
-        sums.centroid(self.lo, self.hi, self.last)
-    }
-
-    /// Adds the grid points of `cell`, where its falling and rising terms
-    /// have strengths `wa` and `wb`.
-    fn add_cell(&self, cell: &Cell, wa: f64, wb: f64, sums: &mut Sums) {
-        let Cell { at, span, per_point, first, end } = *cell;
-        if first >= end {
-            return;
-        }
-        // s = (j − at)/span: a piece up to s = `to` covers the grid points
-        // from the last piece's end to the first at or after `to`.
-        let mut from = first;
-        for (to, c0, c1) in self.pieces(wa, wb) {
-            let b = if to < 1.0 { ceil(at + to * span).clamp(from, end) } else { end };
-            if b > from {
-                sums.add(from, b, c0 + c1 * (from - at) * per_point, c1 * per_point, self.last);
-            }
-            from = b;
-        }
-    }
-
-    /// μ on the cell as pieces μ = c0 + c1·s, each up to s = `to`, in order
-    /// (some may be empty).
-    ///
-    /// Min/max: f = min(w_a, 1 − s) is w_a up to 1 − w_a, then 1 − s; g =
-    /// min(w_b, s) is s up to w_b, then w_b. f falls and g rises, so μ is f
-    /// up to their crossing s* and g after it: w_a, then 1 − s from 1 − w_a
-    /// to s*, then s from s* to w_b, then w_b.
-    fn pieces(&self, wa: f64, wb: f64) -> [(f64, f64, f64); 4] {
-        const EMPTY: (f64, f64, f64) = (1.0, 0.0, 0.0);
+        // One dispatch on the methods per call, not one per cell.
         match (self.implication, self.aggregation) {
-            // (Min with sum aggregation never gets here: see `new`.)
-            (Implication::Min, _) => {
-                let crossing = self.crossing(wa, wb);
-                [
-                    (if 1.0 - wa < crossing { 1.0 - wa } else { crossing }, wa, 0.0),
-                    (crossing, 1.0, -1.0),
-                    (if wb > crossing { wb } else { crossing }, 0.0, 1.0),
-                    (1.0, wb, 0.0),
-                ]
-            }
-            (Implication::Product, Aggregation::Max) => {
-                [(self.crossing(wa, wb), wa, -wa), (1.0, 0.0, wb), EMPTY, EMPTY]
-            }
-            (Implication::Product, Aggregation::Sum) => [(1.0, wa, wb - wa), EMPTY, EMPTY, EMPTY],
+            (Implication::Min, _) => self.centroid_of::<MinMax>(strength),
+            (Implication::Product, Aggregation::Max) => self.centroid_of::<ProductMax>(strength),
+            (Implication::Product, Aggregation::Sum) => self.centroid_of::<ProductSum>(strength),
         }
     }
 
-    /// Where the falling part (term k) meets the rising part (term k+1):
-    /// min(w_a, 1 − s) = min(w_b, s) (at value min(w_a, w_b, ½)), or
-    /// w_a·(1 − s) = w_b·s.
-    fn crossing(&self, wa: f64, wb: f64) -> f64 {
-        match self.implication {
-            Implication::Min if wa <= wb && wa <= 0.5 => wa,
-            Implication::Min if wb <= wa && wb <= 0.5 => 1.0 - wb,
-            Implication::Min => 0.5,
-            Implication::Product => wa / (wa + wb),
+    fn centroid_of<M: Method>(&self, strength: &[f64]) -> Option<f64> {
+        // S0 = Σ μ_j and S1 = Σ j·μ_j; whether some sample is nonzero is
+        // decided from the strengths, not from S0.
+        let (mut s0, mut s1, mut positive) = (0.0, 0.0, false);
+        for ((cell, &wa), &wb) in self.cells.iter().zip(strength).zip(&strength[1..]) {
+            if wa > 0.0 || wb > 0.0 {
+                positive |= (wa > 0.0 && cell.len > 0.0) || (wb > 0.0 && cell.rises);
+                let (z0, z1) = M::sums(cell, wa, wb);
+                s0 += z0;
+                s1 += cell.start * z0 + z1;
+            }
         }
+        let at_end = |(k, s): (usize, f64)| M::at(strength[k], strength[k + 1], s);
+        let (first, last) = (at_end(self.ends[0]), at_end(self.ends[1]));
+        if !(positive || first > 0.0 || last > 0.0) {
+            return None;
+        }
+        let (s0, s1) = (s0 + first + last, s1 + self.last * last);
+        trapezoid_centroid(s0, s1, first, last, self.lo, self.hi, self.last)
     }
 }
 
-/// The grid points between two neighbouring peaks p and q: s = (j − at)/span
-/// on the grid's index axis, with at = (p − lo)/dx and span = (q − p)/dx;
-/// the first grid point at or after p and the first at or after q (0
-/// before lo, L + 1 past hi). Edges are found once, so neighbouring cells
-/// and pieces agree on which grid points are whose.
+/// μ on a cell whose falling and rising terms have strengths w_a and w_b
+/// (not both zero): its sums over the cell's points (`Cell::sums` of its
+/// pieces c0 + c1·s, each as (s where it ends, c0, c1), the last running
+/// to the cell's end), and its value at one s.
+trait Method {
+    fn sums(cell: &Cell, wa: f64, wb: f64) -> (f64, f64);
+    fn at(wa: f64, wb: f64, s: f64) -> f64;
+}
+
+/// f = min(w_a, 1 − s) is w_a up to 1 − w_a, then 1 − s; g = min(w_b, s)
+/// is s up to w_b, then w_b. f falls and g rises, so μ = max(f, g) is f up
+/// to their crossing s* and g after it: w_a, then 1 − s from 1 − w_a to
+/// s*, then s from s* to w_b, then w_b. They cross at min(w_a, w_b, ½).
+/// With one strength zero only two pieces are left: those cells, most of
+/// the active ones, take a shorter path.
+struct MinMax;
+
+impl Method for MinMax {
+    #[inline(always)]
+    fn sums(cell: &Cell, wa: f64, wb: f64) -> (f64, f64) {
+        if wb == 0.0 {
+            return cell.sums([(1.0 - wa, wa, 0.0), (1.0, 1.0, -1.0)]);
+        }
+        if wa == 0.0 {
+            return cell.sums([(wb, 0.0, 1.0), (1.0, wb, 0.0)]);
+        }
+        let crossing = if wa <= wb && wa <= 0.5 {
+            wa
+        } else if wb <= wa && wb <= 0.5 {
+            1.0 - wb
+        } else {
+            0.5
+        };
+        cell.sums([
+            (if 1.0 - wa < crossing { 1.0 - wa } else { crossing }, wa, 0.0),
+            (crossing, 1.0, -1.0),
+            (if wb > crossing { wb } else { crossing }, 0.0, 1.0),
+            (1.0, wb, 0.0),
+        ])
+    }
+
+    fn at(wa: f64, wb: f64, s: f64) -> f64 {
+        // Plain comparisons: no NaN to handle.
+        let falling = if wa < 1.0 - s { wa } else { 1.0 - s };
+        let rising = if wb < s { wb } else { s };
+        if falling > rising { falling } else { rising }
+    }
+}
+
+/// w_a·(1 − s) up to where it meets w_b·s, then w_b·s.
+struct ProductMax;
+
+impl Method for ProductMax {
+    #[inline(always)]
+    fn sums(cell: &Cell, wa: f64, wb: f64) -> (f64, f64) {
+        cell.sums([(wa / (wa + wb), wa, -wa), (1.0, 0.0, wb)])
+    }
+
+    fn at(wa: f64, wb: f64, s: f64) -> f64 {
+        let (falling, rising) = (wa * (1.0 - s), wb * s);
+        if falling > rising { falling } else { rising }
+    }
+}
+
+/// w_a·(1 − s) + w_b·s: one piece.
+struct ProductSum;
+
+impl Method for ProductSum {
+    #[inline(always)]
+    fn sums(cell: &Cell, wa: f64, wb: f64) -> (f64, f64) {
+        cell.sums([(1.0, wa, wb - wa)])
+    }
+
+    fn at(wa: f64, wb: f64, s: f64) -> f64 {
+        wa * (1.0 - s) + wb * s
+    }
+}
+
+/// The inner grid points between two neighbouring peaks p and q: `len` of
+/// them from index `start` (the first at or after p, and at least 1), at
+/// s = (i + offset)/span for the i-th, span = (q − p)/dx. Edges are found
+/// once, so neighbouring cells agree on which grid points are whose.
 #[derive(Clone, Copy, Debug)]
 struct Cell {
-    at: f64,
+    start: f64,
+    len: f64,
+    /// offset − ½ (`below` rounds to the nearest whole number).
+    offset_less_half: f64,
     span: f64,
-    /// 1/span: how much s moves per grid point.
+    /// 1/span: how much s moves per grid point; s at the first point.
     per_point: f64,
-    first: f64,
-    end: f64,
+    s_first: f64,
+    /// `sums_below(len)`.
+    len_sums: (f64, f64, f64),
+    /// Whether some point lies past p (where the rising term is nonzero).
+    rises: bool,
 }
 
-/// The smallest whole number at or above `v`, in f64 arithmetic: adding
-/// and taking away 1.5·2⁵² leaves the nearest whole number (there the
-/// doubles are one apart), one more if that is below `v`. Exact for
-/// |v| < 2⁵¹; the callers clamp the result to the grid's indices (at most
-/// 100 001), so a position far outside them lands on the same index.
-/// Why not `f64::ceil`: on baseline x86-64 (no SSE4.1) it is a libm call
-/// that costs more than the rest of a piece, and converting to an integer
-/// and back is several instructions (Rust's `as` saturates); so the grid
-/// indices here are whole numbers held in f64.
-fn ceil(v: f64) -> f64 {
-    const ROUND: f64 = 6_755_399_441_055_744.0;
-    let nearest = (v + ROUND) - ROUND;
-    if nearest < v { nearest + 1.0 } else { nearest }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::ceil;
-
-    /// The f64 ceiling agrees with libm's on whole numbers, just either
-    /// side of them, negative grid positions and the largest grids.
-    #[test]
-    fn ceil_in_f64_arithmetic_is_the_ceiling() {
-        let mut cases = vec![0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 1e-300, -1e-300, 200_000.0, 2f64.powi(50) - 0.5];
-        for k in [-3.0f64, 0.0, 1.0, 7.0, 100.0, 100_000.0] {
-            cases.extend([k, k.next_up(), k.next_down(), k + 0.25, k - 0.75]);
+impl Cell {
+    /// (Σ μ_i, Σ i·μ_i) over the cell's points i = 0 … n − 1 for μ in
+    /// `pieces` (see `Method`). Piece by piece, μ = α + β·i over the points
+    /// from the last piece's end to its own, so its sums are α·Δn + β·ΔT1
+    /// and α·ΔT1 + β·ΔT2 with T1, T2 the sums of i and i² below an end: an
+    /// empty piece adds exactly zero, and a piece of small values small
+    /// sums (no cancelling between pieces).
+    #[inline(always)]
+    fn sums<const P: usize>(&self, pieces: [(f64, f64, f64); P]) -> (f64, f64) {
+        let (mut z0, mut z1) = (0.0, 0.0);
+        let mut from = (0.0, 0.0, 0.0);
+        for (p, (to, c0, c1)) in pieces.into_iter().enumerate() {
+            let end = if p + 1 < P { self.below(to) } else { self.len_sums };
+            let (n, t1, t2) = (end.0 - from.0, end.1 - from.1, end.2 - from.2);
+            // μ = c0 + c1·s with s = s_first + i·per_point: α + β·i.
+            let (a, b) = (c0 + c1 * self.s_first, c1 * self.per_point);
+            z0 += a * n + b * t1;
+            z1 += a * t1 + b * t2;
+            from = end;
         }
-        for v in cases {
-            assert_eq!(ceil(v), v.ceil(), "ceil({v:e})");
-        }
+        (z0, z1)
     }
+
+    /// The first point n with s ≥ `to` (0 … len), and Σ i, Σ i² over the
+    /// points below it: whole numbers held in f64, exact below 2⁵³ (n up
+    /// to about 200 000, beyond the block's 100 001 points).
+    fn below(&self, to: f64) -> (f64, f64, f64) {
+        // The ceiling of the position, as the nearest whole number to it
+        // plus ½: adding and taking away 1.5·2⁵² rounds (there the doubles
+        // are one apart). A point exactly on the end may fall on either
+        // side: the pieces meet there. Not `f64::ceil`: on baseline x86-64
+        // (no SSE4.1) that is a libm call costing more than the rest.
+        const ROUND: f64 = 6_755_399_441_055_744.0;
+        let n = ((to * self.span - self.offset_less_half) + ROUND) - ROUND;
+        let n = if n > 0.0 { n } else { 0.0 };
+        sums_below(if n < self.len { n } else { self.len })
+    }
+}
+
+/// n, Σ i and Σ i² over i = 0 … n − 1 (n whole, exact as above).
+fn sums_below(n: f64) -> (f64, f64, f64) {
+    let t1 = 0.5 * n * (n - 1.0);
+    (n, t1, t1 * (2.0 * n - 1.0) / 3.0)
 }

@@ -361,6 +361,11 @@ impl Fis {
     /// closed form from the term strengths instead (see `centroid`).
     fn mamdani_output(&mut self, o: usize) -> f64 {
         let by_term = self.methods.by_term();
+        let midpoint = (self.outputs[o].lo + self.outputs[o].hi) / 2.0;
+        if let (true, Some(exact)) = (by_term, &self.exact[o]) {
+            let strength = &self.term_strength[self.term_offsets[o]..self.term_offsets[o + 1]];
+            return exact.centroid(strength).unwrap_or(midpoint);
+        }
         let Fis {
             fired,
             n_fired,
@@ -372,7 +377,6 @@ impl Fis {
             term_grids,
             supports,
             methods,
-            exact,
             outputs,
             grids,
             ..
@@ -382,7 +386,6 @@ impl Fis {
         let strength = &term_strength[output_terms.clone()];
         let (imp, agg) = (methods.implication, methods.aggregation);
         let v = &outputs[o];
-        let midpoint = (v.lo + v.hi) / 2.0;
         // The implied sets are zero outside their term's support: only the
         // union of the firing terms' supports is written and read.
         let (mut from, mut to) = (usize::MAX, 0);
@@ -392,9 +395,6 @@ impl Fis {
             imply_and_aggregate(&mut aggregate[s.clone()], &terms[t][s], w, imp, agg);
         };
         if by_term {
-            if let Some(exact) = &exact[o] {
-                return exact.centroid(strength).unwrap_or(midpoint);
-            }
             for (t, &w) in strength.iter().enumerate() {
                 if w > 0.0 {
                     apply(t, w);

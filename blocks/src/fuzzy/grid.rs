@@ -119,18 +119,19 @@ impl RuleGrid {
         x: &[f64],
         mut visit: impl FnMut(usize, f64),
     ) {
-        for ((l, p), &xi) in located.iter_mut().zip(partitions).zip(x) {
-            *l = p.locate(xi);
-        }
         // Two inputs (the common controller): the four corners written out,
         // in the general loop's order and with its arithmetic.
-        if let ([(k0, a0, b0), (k1, a1, b1)], [s0, s1]) = (&*located, strides) {
+        if let ([p0, p1], [s0, s1], [x0, x1]) = (partitions, strides, x) {
+            let ((k0, a0, b0), (k1, a1, b1)) = (p0.locate(*x0), p1.locate(*x1));
             let and = |u: f64, v: f64| if product { u * v } else { u.min(v) };
-            visit(k0 * s0 + k1 * s1, and(*a0, *a1));
-            visit((k0 + 1) * s0 + k1 * s1, and(*b0, *a1));
-            visit(k0 * s0 + (k1 + 1) * s1, and(*a0, *b1));
-            visit((k0 + 1) * s0 + (k1 + 1) * s1, and(*b0, *b1));
+            visit(k0 * s0 + k1 * s1, and(a0, a1));
+            visit((k0 + 1) * s0 + k1 * s1, and(b0, a1));
+            visit(k0 * s0 + (k1 + 1) * s1, and(a0, b1));
+            visit((k0 + 1) * s0 + (k1 + 1) * s1, and(b0, b1));
             return;
+        }
+        for ((l, p), &xi) in located.iter_mut().zip(partitions).zip(x) {
+            *l = p.locate(xi);
         }
         for corner in 0..1usize << located.len() {
             let (mut cell, mut strength) = (0, if product { 1.0 } else { f64::INFINITY });

@@ -46,12 +46,9 @@ impl Partition {
         while k < last && x >= p[k + 1] {
             k += 1;
         }
-        if x == p[k] {
-            (k, 1.0, 0.0)
-        } else if x == p[k + 1] {
-            (k, 0.0, 1.0)
-        } else {
-            (k, (p[k + 1] - x) / (p[k + 1] - p[k]), (x - p[k]) / (p[k + 1] - p[k]))
-        }
+        // On a peak these are exactly 1 and 0 (a/a and 0/a), as `Mf::eval`
+        // gives there by its own branch.
+        let width = p[k + 1] - p[k];
+        (k, (p[k + 1] - x) / width, (x - p[k]) / width)
     }
 }
