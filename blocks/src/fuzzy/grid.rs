@@ -91,7 +91,8 @@ impl RuleGrid {
     /// Rules of zero strength change nothing (w ≥ 0: max(w, 0) = w + 0 = w).
     pub fn fire_into_terms(&mut self, x: &[f64], conclusions: &TermsByCell, sum: bool, strength: &mut [f64]) {
         Self::corners(&mut self.located, &self.partitions, &self.strides, self.product, x, |cell, s| {
-            for &t in &conclusions.terms[conclusions.cells[cell]..conclusions.cells[cell + 1]] {
+            let (from, to) = conclusions.cells[cell];
+            for &t in &conclusions.terms[from..to] {
                 conclude(&mut strength[t], s, sum);
             }
         });
@@ -99,12 +100,13 @@ impl RuleGrid {
 
     /// The rules' conclusions as term indices, by cell (see `fire_into_terms`).
     pub fn terms_by_cell(&self, conclusions_of: impl Fn(usize) -> Vec<usize>) -> TermsByCell {
-        let mut by = TermsByCell { cells: vec![0], terms: Vec::new() };
+        let mut by = TermsByCell { cells: Vec::new(), terms: Vec::new() };
         for c in 0..self.cells.len() - 1 {
+            let from = by.terms.len();
             for &r in &self.rules[self.cells[c]..self.cells[c + 1]] {
                 by.terms.extend(conclusions_of(r));
             }
-            by.cells.push(by.terms.len());
+            by.cells.push((from, by.terms.len()));
         }
         by
     }
@@ -146,9 +148,10 @@ impl RuleGrid {
     }
 }
 
-/// Per cell of a rule table, the term indices its rules conclude.
+/// Per cell of a rule table, the term indices its rules conclude:
+/// `terms[from..to]` for the cell's (from, to).
 #[derive(Clone, Debug)]
 pub struct TermsByCell {
-    cells: Vec<usize>,
+    cells: Vec<(usize, usize)>,
     terms: Vec<usize>,
 }
