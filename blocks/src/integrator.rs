@@ -139,6 +139,10 @@ impl Block for Integrator {
         }
     }
 
+    fn is_plain_integrator(&self) -> bool {
+        !self.limited && self.reset.is_none() && self.initial_port.is_none()
+    }
+
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
         let held = self.reset == Some(Trigger::Level) && io.u(self.reset_port) != 0.0;
         for (k, d) in dx.iter_mut().enumerate() {

@@ -100,15 +100,33 @@ pub const TYPES: &[BlockType] = &[
 struct TimeFn<F: Fn(&Io) -> f64 + Send + Clone> {
     f: F,
     events: Vec<f64>,
+    /// The last evaluation: its time's bits, whether that time was seen as
+    /// a left limit ([`Io::reached`]; only a source with events can jump
+    /// there), and the value. A source is asked for the same time several
+    /// times a step — RK4's two middle stages share one, its last stage's
+    /// is the next major step's — and f may be costly (a `sin`): RK4 then
+    /// evaluates it twice a step instead of five times.
+    last: (u64, bool, f64),
+}
+
+impl<F: Fn(&Io) -> f64 + Send + Clone> TimeFn<F> {
+    /// No time's bits are NaN's: the first call evaluates f.
+    const NONE: (u64, bool, f64) = (u64::MAX, false, 0.0);
 }
 
 impl<F: Fn(&Io) -> f64 + Send + Clone + 'static> Block for TimeFn<F> {
     fn updates(&self) -> bool {
         false
     }
+    fn initialize(&mut self, _x0: &mut [f64]) {
+        self.last = Self::NONE;
+    }
     fn output(&mut self, io: &mut Io) {
-        let y = (self.f)(io);
-        io.set(0, y);
+        let key = (io.t.to_bits(), !self.events.is_empty() && !io.reached(io.t));
+        if (self.last.0, self.last.1) != key {
+            self.last = (key.0, key.1, (self.f)(io));
+        }
+        io.set(0, self.last.2);
     }
 
     fn next_event(&self, t: f64) -> f64 {
@@ -126,7 +144,7 @@ fn scalar_source<F: Fn(&Io) -> f64 + Send + Clone + 'static>(
     let st = p.sample_time(SampleTime::Continuous)?;
     let mut iface = Interface::new(st).output("y", Width::Fixed(1));
     iface.piecewise_constant = piecewise;
-    windowed(p, Built::new(TimeFn { f, events }, iface))
+    windowed(p, Built::new(TimeFn { f, events, last: TimeFn::<F>::NONE }, iface))
 }
 
 /// Zero outside an active window [on, off); the window's edges are events.

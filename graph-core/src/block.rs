@@ -399,6 +399,16 @@ pub trait Block: std::any::Any + Send + dyn_clone::DynClone {
     /// Writes the derivatives of the continuous states.
     fn derivatives(&mut self, _io: &Io, _dx: &mut [f64]) {}
 
+    /// Whether the block is a plain integrator: its output is its states
+    /// and their derivatives are its one input, element by element (ẋ = u,
+    /// y = x), with no limits, resets, modes or memory besides. The
+    /// scheduler then copies both in place of calling `output` and
+    /// `derivatives` (which must still compute exactly that), and skips
+    /// `clamp_states`.
+    fn is_plain_integrator(&self) -> bool {
+        false
+    }
+
     /// Projects continuous states back into their admissible set (limited
     /// integrators) after an accepted step; returns whether anything moved.
     fn clamp_states(&self, _x: &mut [f64]) -> bool {

@@ -198,6 +198,7 @@ impl Simulator {
         (self.t, self.stop, self.first, self.next_event) = (s.t, s.stop, s.first, s.next_event);
         (self.major_steps, self.stalled, self.watch, self.held) = (s.major_steps, s.stalled, s.watch, s.held);
         (self.at_event, self.inputs_changed) = (s.at_event, s.inputs_changed);
+        self.outputs_current = false;
         Ok(())
     }
 }

@@ -2,7 +2,7 @@
 //! outputs recomputed at each stage, discrete outputs held.
 
 use super::io_for;
-use super::visit::Visit;
+use super::visit::{Integrand, Run, Visit};
 use crate::compile::Model;
 use ctlgraph_solver::OdeSystem;
 
@@ -13,23 +13,38 @@ pub(super) struct Minor<'a> {
     pub(super) model: &'a mut Model,
     pub(super) signals: &'a mut [f64],
     pub(super) continuous: &'a [Visit],
+    /// Set when the signals hold the major step's outputs at the step's
+    /// start: the continuous visits the first stage must still run there
+    /// ([`stale_at_start`]). Taken by that stage.
+    pub(super) at_start: Option<&'a [Visit]>,
+    /// The integrated blocks: those called for their derivatives, and
+    /// the plain integrators, whose derivatives are their inputs.
     pub(super) stateful: &'a [usize],
+    pub(super) integrands: &'a [Integrand],
     pub(super) t_end: f64,
 }
 
 impl Minor<'_> {
     /// Continuous outputs at (t, x), modes frozen.
     pub(super) fn outputs(&mut self, t: f64, x: &[f64]) {
+        self.run(self.continuous, t, x);
+    }
+
+    /// The outputs of `visits` at (t, x), modes frozen.
+    fn run(&mut self, visits: &[Visit], t: f64, x: &[f64]) {
         let m = &mut *self.model;
         let left = t >= self.t_end;
-        for v in self.continuous {
-            if let Some(kernel) = &v.kernel {
-                kernel.run(self.signals);
-                continue;
+        for v in visits {
+            match &v.run {
+                Run::Kernel(kernel) => kernel.run(self.signals),
+                Run::States(integrator) => integrator.output(x, self.signals),
+                Run::Call => {
+                    let meta = &m.slots[v.block];
+                    let mut io =
+                        io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
+                    m.blocks[v.block].output(&mut io);
+                }
             }
-            let meta = &m.slots[v.block];
-            let mut io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
-            m.blocks[v.block].output(&mut io);
         }
     }
 
@@ -41,11 +56,9 @@ impl Minor<'_> {
             io_for(meta, t, t >= self.t_end, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
         m.blocks[i].zero_crossings(&io, g);
     }
-}
 
-impl OdeSystem for Minor<'_> {
-    fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
-        self.outputs(t, x);
+    /// The stateful blocks' derivatives at (t, x), outputs computed.
+    fn stateful_derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
         let m = &mut *self.model;
         let left = t >= self.t_end;
         for &i in self.stateful {
@@ -53,5 +66,50 @@ impl OdeSystem for Minor<'_> {
             let io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
             m.blocks[i].derivatives(&io, &mut dx[meta.states.clone()]);
         }
+        for integrator in self.integrands {
+            integrator.derivatives(self.signals, dx);
+        }
     }
+}
+
+impl OdeSystem for Minor<'_> {
+    fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        self.outputs(t, x);
+        self.stateful_derivatives(t, x, dx);
+    }
+
+    /// At the step's start the major step has just computed every output
+    /// at this (t, x); only the stale ones are run again.
+    fn derivatives_at_start(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        match self.at_start.take() {
+            Some(stale) => self.run(stale, t, x),
+            None => self.outputs(t, x),
+        }
+        self.stateful_derivatives(t, x, dx);
+    }
+}
+
+/// The continuous visits whose outputs at a step's start, where the major
+/// step has just computed them, may differ in the solver's first stage:
+/// blocks with memory their `update` changes after the major step's
+/// outputs (a clamped PID, a delay's history), blocks with modes or
+/// zero crossings (frozen in minor steps), and every block downstream of
+/// one. The others — a [`crate::block::Block`] without `update` or zero crossings
+/// computes its outputs from t, its states and its inputs alone — would
+/// compute the same values again.
+pub(super) fn stale_at_start(model: &Model, continuous: &[Visit]) -> Vec<Visit> {
+    let mut stale = vec![false; model.signal_len];
+    let mut runs = |v: &&Visit| {
+        let (block, slot) = (&model.blocks[v.block], &model.slots[v.block]);
+        let own = block.updates() || block.num_zero_crossings() > 0 || block.needs_major_step();
+        let reads_stale =
+            model.in_ports[slot.inputs.clone()].iter().any(|p| stale[p.offset..p.offset + p.width].contains(&true));
+        if own || reads_stale {
+            for p in &model.out_ports[slot.outputs.clone()] {
+                stale[p.offset..p.offset + p.width].fill(true);
+            }
+        }
+        own || reads_stale
+    };
+    continuous.iter().filter(&mut runs).copied().collect()
 }

@@ -27,9 +27,9 @@ use crate::compile::{Model, Rate, Slot};
 use ctlgraph_solver::{Integrator, Method, Stats, Zoh};
 pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
-use minor::Minor;
+use minor::{Minor, stale_at_start};
 use std::ops::Range;
-use visit::Visit;
+use visit::{Integrand, Run, Visit};
 
 /// Counters for the run report.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -65,10 +65,13 @@ pub struct Simulator {
     stalled: u32,
     /// Zero-crossing functions and their detection.
     watch: Watch,
-    /// The blocks whose states the solver integrates, and how many states
-    /// that is (from the model's plan, [`crate::compile::Between`]).
-    integrated: Vec<usize>,
+    /// How many states the solver integrates (from the model's plan,
+    /// [`crate::compile::Between`]), and the blocks they belong to: the
+    /// plain integrators, and the others (whose `derivatives` and
+    /// `clamp_states` are called).
     n_integrated: usize,
+    integrands: Vec<Integrand>,
+    called: Vec<usize>,
     /// LTI blocks stepped exactly (see [`crate::compile::Between`]).
     held: Vec<Held>,
     /// Blocks with an `update` to run (execution order).
@@ -79,6 +82,12 @@ pub struct Simulator {
     regular: Vec<Visit>,
     /// The blocks whose outputs minor steps recompute (`Between::minor`).
     minor: Vec<Visit>,
+    /// Those of them the first stage recomputes when the signals hold the
+    /// major step's outputs ([`stale_at_start`]), and whether they do:
+    /// set by a major step's outputs, cleared by anything that could
+    /// change a signal or state before the step is taken.
+    stale_at_start: Vec<Visit>,
+    outputs_current: bool,
     /// Whether this major step is at a block event (see `Between::event_only`).
     at_event: bool,
     /// A host set an input since the last outputs (see [`Simulator::set_input`]).
@@ -137,7 +146,8 @@ impl Simulator {
             stalled: 0,
             watch,
             held,
-            integrated: model.between.integrated.clone(),
+            integrands: model.between.integrated.iter().filter_map(|&i| Integrand::of(&model, i)).collect(),
+            called: model.between.integrated.iter().copied().filter(|&i| Integrand::of(&model, i).is_none()).collect(),
             n_integrated: model.between.n_integrated,
             updating: Visit::list(&model, (0..n).filter(|&i| model.blocks[i].updates())),
             every: Visit::list(&model, 0..n),
@@ -145,13 +155,17 @@ impl Simulator {
                 &model,
                 (0..n).filter(|&i| model.slots[i].rate != Rate::Constant && !model.between.event_only[i]),
             ),
-            minor: Visit::list(&model, model.between.minor.iter().copied()),
+            minor: Vec::new(),
+            stale_at_start: Vec::new(),
+            outputs_current: false,
             at_event: true,
             inputs_changed: false,
             pause: f64::INFINITY,
             id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             model,
         };
+        sim.minor = Visit::list(&sim.model, sim.model.between.minor.iter().copied());
+        sim.stale_at_start = stale_at_start(&sim.model, &sim.minor);
         sim.reset();
         sim
     }
@@ -160,6 +174,7 @@ impl Simulator {
     pub fn reset(&mut self) {
         self.t = 0.0;
         self.first = true;
+        self.outputs_current = false;
         self.major_steps = 0;
         self.grid.set_tick(1);
         self.signals.iter_mut().for_each(|s| *s = 0.0);
@@ -194,6 +209,7 @@ impl Simulator {
     /// The model, signals and states as they stand (for linearisation
     /// around the point the run has reached).
     pub(crate) fn operating_point(&mut self) -> (&mut Model, &mut [f64], &mut [f64]) {
+        self.outputs_current = false;
         (&mut self.model, &mut self.signals, &mut self.x)
     }
 
@@ -251,13 +267,15 @@ impl Simulator {
         let order = if all { &self.every } else { &self.regular };
         for v in order {
             if due(v.rate, &self.clocks, self.first) {
-                if let Some(kernel) = &v.kernel {
-                    kernel.run(&mut self.signals);
-                    continue;
+                match &v.run {
+                    Run::Kernel(kernel) => kernel.run(&mut self.signals),
+                    Run::States(integrator) => integrator.output(&self.x, &mut self.signals),
+                    Run::Call => {
+                        let slot = &m.slots[v.block];
+                        let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
+                        m.blocks[v.block].output(&mut io);
+                    }
                 }
-                let slot = &m.slots[v.block];
-                let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
-                m.blocks[v.block].output(&mut io);
             }
         }
     }
@@ -290,6 +308,7 @@ impl Simulator {
             let m = &self.model;
             return Err(self.blame().signal(&self.signals, self.t, |i| m.blocks[i].diagnose()));
         }
+        self.outputs_current = true;
         Ok(())
     }
 
@@ -324,11 +343,14 @@ impl Simulator {
         }
         let target = self.next_major_time();
         let t0 = self.t;
+        let current = std::mem::take(&mut self.outputs_current) && !self.inputs_changed;
         let mut sys = Minor {
             model: &mut self.model,
             signals: &mut self.signals,
             continuous: &self.minor,
-            stateful: &self.integrated,
+            at_start: current.then_some(&self.stale_at_start[..]),
+            stateful: &self.called,
+            integrands: &self.integrands,
             t_end: target,
         };
         let x = &mut self.x[..self.n_integrated];
@@ -364,7 +386,7 @@ impl Simulator {
             self.grid.pass(self.t, self.tol);
         }
         let mut clamped = false;
-        for &i in &self.integrated {
+        for &i in &self.called {
             let meta = &self.model.slots[i];
             clamped |= self.model.blocks[i].clamp_states(&mut self.x[meta.states.clone()]);
         }

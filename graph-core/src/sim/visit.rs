@@ -1,6 +1,6 @@
-//! The sweeps' precomputed visits: which block, when it is due, and, for
-//! blocks whose output the step loop computes in place from the [`Kernel`]
-//! they name, that kernel (no call through a view).
+//! The sweeps' precomputed visits: which block, when it is due, and how
+//! its output is computed — through a view and a dynamic call, or in
+//! place for the blocks that name a [`Kernel`] and for plain integrators.
 
 use crate::block::Kernel;
 use crate::compile::{Model, Rate};
@@ -11,15 +11,79 @@ use crate::compile::{Model, Rate};
 pub(super) struct Visit {
     pub(super) block: usize,
     pub(super) rate: Rate,
-    /// Run in place of the block's `output`.
-    pub(super) kernel: Option<Inline>,
+    pub(super) run: Run,
 }
 
 impl Visit {
     /// Visits of `blocks`, in their order.
     pub(super) fn list(model: &Model, blocks: impl IntoIterator<Item = usize>) -> Vec<Visit> {
-        let visit = |block| Visit { block, rate: model.slots[block].rate, kernel: Inline::of(model, block) };
+        let visit = |block| Visit { block, rate: model.slots[block].rate, run: Run::of(model, block) };
         blocks.into_iter().map(visit).collect()
+    }
+}
+
+/// How a visit computes the block's outputs.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Run {
+    /// The block's `output`, through a view.
+    Call,
+    /// The block's kernel, on the signal buffer.
+    Kernel(Inline),
+    /// A plain integrator's y = x: its states copied to its output.
+    States(Integrand),
+}
+
+impl Run {
+    fn of(model: &Model, block: usize) -> Run {
+        match (Inline::of(model, block), Integrand::of(model, block)) {
+            (Some(kernel), _) => Run::Kernel(kernel),
+            (None, Some(integrand)) => Run::States(integrand),
+            (None, None) => Run::Call,
+        }
+    }
+}
+
+/// A plain integrator ([`crate::block::Block::is_plain_integrator`]) whose
+/// one input and one output are as wide as its states: the scheduler
+/// copies its states to its output and its input to its derivatives, in
+/// place of the two calls through a view that cost many times the copy.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Integrand {
+    u: usize,
+    y: usize,
+    x: usize,
+    width: usize,
+}
+
+impl Integrand {
+    pub(super) fn of(model: &Model, i: usize) -> Option<Integrand> {
+        if !model.blocks[i].is_plain_integrator() {
+            return None;
+        }
+        let slot = &model.slots[i];
+        let width = slot.states.len();
+        let (ins, outs) = (&model.in_ports[slot.inputs.clone()], &model.out_ports[slot.outputs.clone()]);
+        let ([u], [y]) = (ins, outs) else { return None };
+        (u.width == width && y.width == width).then_some(Integrand { u: u.offset, y: y.offset, x: slot.states.start, width })
+    }
+
+    /// y = x (`x` all states, or the solver's integrated part: the
+    /// integrator's are in both at the same places).
+    #[inline]
+    pub(super) fn output(&self, x: &[f64], signals: &mut [f64]) {
+        let (x, y) = (&x[self.x..self.x + self.width], &mut signals[self.y..self.y + self.width]);
+        // An element loop: for a few values cheaper than copy_from_slice's memmove.
+        for (y, &x) in y.iter_mut().zip(x) {
+            *y = x;
+        }
+    }
+
+    /// ẋ = u.
+    #[inline]
+    pub(super) fn derivatives(&self, signals: &[f64], dx: &mut [f64]) {
+        for (d, &u) in dx[self.x..self.x + self.width].iter_mut().zip(&signals[self.u..self.u + self.width]) {
+            *d = u;
+        }
     }
 }
 

@@ -25,6 +25,14 @@ use std::fmt;
 pub trait OdeSystem {
     /// Writes `f(t, x)` into `dx` (same length as `x`).
     fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]);
+
+    /// [`OdeSystem::derivatives`] for a step's first evaluation, at exactly
+    /// the `t` and `x` that [`Integrator::advance`] was given (before any
+    /// other evaluation in that call): a system that already holds what f
+    /// needs there may skip recomputing it.
+    fn derivatives_at_start(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        self.derivatives(t, x, dx);
+    }
 }
 
 /// Integration method and its options.
@@ -343,18 +351,17 @@ impl Integrator {
         self.x0.copy_from_slice(x);
         self.t0 = t;
         self.f1_valid = false;
-        let h = t_limit - t;
         let t_new = match self.method {
             Method::Euler { .. } => {
-                self.euler(sys, t, h, x);
+                self.euler(sys, t, t_limit, x);
                 t_limit
             }
             Method::Heun { .. } => {
-                self.heun(sys, t, h, x);
+                self.heun(sys, t, t_limit, x);
                 t_limit
             }
             Method::Rk4 { .. } => {
-                self.rk4(sys, t, h, x);
+                self.rk4(sys, t, t_limit, x);
                 t_limit
             }
             Method::DormandPrince { rtol, atol, max_step, initial_step } => {
@@ -419,30 +426,44 @@ impl Integrator {
         sys.derivatives(t, src, &mut self.k[stage]);
     }
 
-    fn euler(&mut self, sys: &mut dyn OdeSystem, t: f64, h: f64, x: &mut [f64]) {
-        self.eval(sys, 0, t, false, x);
+    /// The first stage, at the point `advance` was given.
+    fn eval_start(&mut self, sys: &mut dyn OdeSystem, t: f64, x: &[f64]) {
+        self.stats.evaluations += 1;
+        sys.derivatives_at_start(t, x, &mut self.k[0]);
+    }
+
+    // The fixed-step methods take the step from `t` to `t_end`, and
+    // evaluate its last stage at `t_end` itself, the time the next major
+    // step has (t + (t_end − t) may differ from it in the last bit), so
+    // that a source asked for both computes once.
+
+    fn euler(&mut self, sys: &mut dyn OdeSystem, t: f64, t_end: f64, x: &mut [f64]) {
+        let h = t_end - t;
+        self.eval_start(sys, t, x);
         for (xi, ki) in x.iter_mut().zip(&self.k[0]) {
             *xi += h * ki;
         }
     }
 
-    fn heun(&mut self, sys: &mut dyn OdeSystem, t: f64, h: f64, x: &mut [f64]) {
-        self.eval(sys, 0, t, false, x);
+    fn heun(&mut self, sys: &mut dyn OdeSystem, t: f64, t_end: f64, x: &mut [f64]) {
+        let h = t_end - t;
+        self.eval_start(sys, t, x);
         self.stage(x, h, &[(0, 1.0)]);
-        self.eval(sys, 1, t + h, true, x);
+        self.eval(sys, 1, t_end, true, x);
         for i in 0..x.len() {
             x[i] += 0.5 * h * (self.k[0][i] + self.k[1][i]);
         }
     }
 
-    fn rk4(&mut self, sys: &mut dyn OdeSystem, t: f64, h: f64, x: &mut [f64]) {
-        self.eval(sys, 0, t, false, x);
+    fn rk4(&mut self, sys: &mut dyn OdeSystem, t: f64, t_end: f64, x: &mut [f64]) {
+        let h = t_end - t;
+        self.eval_start(sys, t, x);
         self.stage(x, h, &[(0, 0.5)]);
         self.eval(sys, 1, t + 0.5 * h, true, x);
         self.stage(x, h, &[(1, 0.5)]);
         self.eval(sys, 2, t + 0.5 * h, true, x);
         self.stage(x, h, &[(2, 1.0)]);
-        self.eval(sys, 3, t + h, true, x);
+        self.eval(sys, 3, t_end, true, x);
         let n = x.len();
         let (k0, k1, k2, k3) = (&self.k[0][..n], &self.k[1][..n], &self.k[2][..n], &self.k[3][..n]);
         for i in 0..n {
@@ -478,7 +499,7 @@ impl Integrator {
     ) -> Result<f64, SolverError> {
         let Tolerance { rtol, atol, max_step, initial_step } = tol;
         if !self.fsal_valid {
-            self.eval(sys, 0, t, false, x);
+            self.eval_start(sys, t, x);
             self.fsal_valid = true;
         }
         if self.h_next <= 0.0 {

@@ -114,7 +114,7 @@ impl Integrator {
         let Tolerance { rtol, atol, max_step, initial_step } = tol;
         if !self.fsal_valid {
             self.stats.evaluations += 1;
-            sys.derivatives(t, x, &mut w.f0);
+            sys.derivatives_at_start(t, x, &mut w.f0);
             self.fsal_valid = true;
             // Derivatives jumped (an event or a sample hit): the old
             // Jacobian may describe another mode.
