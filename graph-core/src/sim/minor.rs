@@ -2,7 +2,7 @@
 //! outputs recomputed at each stage, discrete outputs held.
 
 use super::io_for;
-use super::visit::{Integrand, Run, Visit};
+use super::visit::{Integrand, Visit};
 use crate::compile::Model;
 use ctlgraph_solver::OdeSystem;
 
@@ -27,24 +27,25 @@ pub(super) struct Minor<'a> {
 impl Minor<'_> {
     /// Continuous outputs at (t, x), modes frozen.
     pub(super) fn outputs(&mut self, t: f64, x: &[f64]) {
+        for integrator in self.integrands {
+            integrator.output(x, self.signals);
+        }
         self.run(self.continuous, t, x);
     }
 
-    /// The outputs of `visits` at (t, x), modes frozen.
+    /// The outputs of `visits` at (t, x), modes frozen (the plain
+    /// integrators' already copied).
     fn run(&mut self, visits: &[Visit], t: f64, x: &[f64]) {
         let m = &mut *self.model;
         let left = t >= self.t_end;
         for v in visits {
-            match &v.run {
-                Run::Kernel(kernel) => kernel.run(self.signals),
-                Run::States(integrator) => integrator.output(x, self.signals),
-                Run::Call => {
-                    let meta = &m.slots[v.block];
-                    let mut io =
-                        io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
-                    m.blocks[v.block].output(&mut io);
-                }
+            if let Some(kernel) = &v.kernel {
+                kernel.run(self.signals);
+                continue;
             }
+            let meta = &m.slots[v.block];
+            let mut io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
+            m.blocks[v.block].output(&mut io);
         }
     }
 
@@ -79,7 +80,8 @@ impl OdeSystem for Minor<'_> {
     }
 
     /// At the step's start the major step has just computed every output
-    /// at this (t, x); only the stale ones are run again.
+    /// at this (t, x), the plain integrators' too; only the stale ones are
+    /// run again.
     fn derivatives_at_start(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
         match self.at_start.take() {
             Some(stale) => self.run(stale, t, x),

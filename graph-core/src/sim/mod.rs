@@ -29,7 +29,7 @@ pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
 use minor::{Minor, stale_at_start};
 use std::ops::Range;
-use visit::{Integrand, Run, Visit};
+use visit::{Integrand, Visit};
 
 /// Counters for the run report.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -130,6 +130,14 @@ impl Simulator {
             })
             .collect();
         let n = model.blocks.len();
+        let integrated = &model.between.integrated;
+        let integrands: Vec<Integrand> = integrated.iter().filter_map(|&i| Integrand::of(&model, i)).collect();
+        let mut plain = vec![false; n];
+        integrated.iter().filter(|&&i| Integrand::of(&model, i).is_some()).for_each(|&i| plain[i] = true);
+        // The output sweeps' visits; the plain integrators' outputs are copied apart.
+        let visits = |blocks: &mut dyn Iterator<Item = usize>| Visit::list(&model, blocks.filter(|&i| !plain[i]));
+        let minor = visits(&mut model.between.minor.iter().copied());
+        let stale = stale_at_start(&model, &minor);
         let mut sim = Simulator {
             signals: vec![0.0; model.signal_len],
             x: vec![0.0; model.n_states],
@@ -146,17 +154,16 @@ impl Simulator {
             stalled: 0,
             watch,
             held,
-            integrands: model.between.integrated.iter().filter_map(|&i| Integrand::of(&model, i)).collect(),
-            called: model.between.integrated.iter().copied().filter(|&i| Integrand::of(&model, i).is_none()).collect(),
+            called: integrated.iter().copied().filter(|&i| !plain[i]).collect(),
+            integrands,
             n_integrated: model.between.n_integrated,
             updating: Visit::list(&model, (0..n).filter(|&i| model.blocks[i].updates())),
-            every: Visit::list(&model, 0..n),
-            regular: Visit::list(
-                &model,
-                (0..n).filter(|&i| model.slots[i].rate != Rate::Constant && !model.between.event_only[i]),
+            every: visits(&mut (0..n)),
+            regular: visits(
+                &mut (0..n).filter(|&i| model.slots[i].rate != Rate::Constant && !model.between.event_only[i]),
             ),
-            minor: Vec::new(),
-            stale_at_start: Vec::new(),
+            minor,
+            stale_at_start: stale,
             outputs_current: false,
             at_event: true,
             inputs_changed: false,
@@ -164,8 +171,6 @@ impl Simulator {
             id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             model,
         };
-        sim.minor = Visit::list(&sim.model, sim.model.between.minor.iter().copied());
-        sim.stale_at_start = stale_at_start(&sim.model, &sim.minor);
         sim.reset();
         sim
     }
@@ -265,17 +270,18 @@ impl Simulator {
         let m = &mut self.model;
         let all = self.first || self.at_event || self.inputs_changed;
         let order = if all { &self.every } else { &self.regular };
+        for integrator in &self.integrands {
+            integrator.output(&self.x, &mut self.signals);
+        }
         for v in order {
             if due(v.rate, &self.clocks, self.first) {
-                match &v.run {
-                    Run::Kernel(kernel) => kernel.run(&mut self.signals),
-                    Run::States(integrator) => integrator.output(&self.x, &mut self.signals),
-                    Run::Call => {
-                        let slot = &m.slots[v.block];
-                        let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
-                        m.blocks[v.block].output(&mut io);
-                    }
+                if let Some(kernel) = &v.kernel {
+                    kernel.run(&mut self.signals);
+                    continue;
                 }
+                let slot = &m.slots[v.block];
+                let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
+                m.blocks[v.block].output(&mut io);
             }
         }
     }

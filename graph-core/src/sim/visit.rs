@@ -1,6 +1,7 @@
-//! The sweeps' precomputed visits: which block, when it is due, and how
-//! its output is computed — through a view and a dynamic call, or in
-//! place for the blocks that name a [`Kernel`] and for plain integrators.
+//! The sweeps' precomputed visits: which block, when it is due, and, for
+//! blocks whose output the step loop computes in place from the [`Kernel`]
+//! they name, that kernel (no call through a view); and the plain
+//! integrators, whose outputs and derivatives the step loop copies.
 
 use crate::block::Kernel;
 use crate::compile::{Model, Rate};
@@ -11,35 +12,15 @@ use crate::compile::{Model, Rate};
 pub(super) struct Visit {
     pub(super) block: usize,
     pub(super) rate: Rate,
-    pub(super) run: Run,
+    /// Run in place of the block's `output`.
+    pub(super) kernel: Option<Inline>,
 }
 
 impl Visit {
     /// Visits of `blocks`, in their order.
     pub(super) fn list(model: &Model, blocks: impl IntoIterator<Item = usize>) -> Vec<Visit> {
-        let visit = |block| Visit { block, rate: model.slots[block].rate, run: Run::of(model, block) };
+        let visit = |block| Visit { block, rate: model.slots[block].rate, kernel: Inline::of(model, block) };
         blocks.into_iter().map(visit).collect()
-    }
-}
-
-/// How a visit computes the block's outputs.
-#[derive(Clone, Copy, Debug)]
-pub(super) enum Run {
-    /// The block's `output`, through a view.
-    Call,
-    /// The block's kernel, on the signal buffer.
-    Kernel(Inline),
-    /// A plain integrator's y = x: its states copied to its output.
-    States(Integrand),
-}
-
-impl Run {
-    fn of(model: &Model, block: usize) -> Run {
-        match (Inline::of(model, block), Integrand::of(model, block)) {
-            (Some(kernel), _) => Run::Kernel(kernel),
-            (None, Some(integrand)) => Run::States(integrand),
-            (None, None) => Run::Call,
-        }
     }
 }
 
@@ -47,6 +28,8 @@ impl Run {
 /// one input and one output are as wide as its states: the scheduler
 /// copies its states to its output and its input to its derivatives, in
 /// place of the two calls through a view that cost many times the copy.
+/// Its output depends on its states alone, so a sweep copies it first and
+/// leaves the block out of its visits.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Integrand {
     u: usize,
@@ -64,26 +47,37 @@ impl Integrand {
         let width = slot.states.len();
         let (ins, outs) = (&model.in_ports[slot.inputs.clone()], &model.out_ports[slot.outputs.clone()]);
         let ([u], [y]) = (ins, outs) else { return None };
-        (u.width == width && y.width == width).then_some(Integrand { u: u.offset, y: y.offset, x: slot.states.start, width })
+        (u.width == width && y.width == width).then_some(Integrand {
+            u: u.offset,
+            y: y.offset,
+            x: slot.states.start,
+            width,
+        })
     }
 
     /// y = x (`x` all states, or the solver's integrated part: the
     /// integrator's are in both at the same places).
     #[inline]
     pub(super) fn output(&self, x: &[f64], signals: &mut [f64]) {
-        let (x, y) = (&x[self.x..self.x + self.width], &mut signals[self.y..self.y + self.width]);
-        // An element loop: for a few values cheaper than copy_from_slice's memmove.
-        for (y, &x) in y.iter_mut().zip(x) {
-            *y = x;
-        }
+        copy(x, self.x, signals, self.y, self.width);
     }
 
     /// ẋ = u.
     #[inline]
     pub(super) fn derivatives(&self, signals: &[f64], dx: &mut [f64]) {
-        for (d, &u) in dx[self.x..self.x + self.width].iter_mut().zip(&signals[self.u..self.u + self.width]) {
-            *d = u;
-        }
+        copy(signals, self.u, dx, self.x, self.width);
+    }
+}
+
+/// `to[at..at + width] = from[start..start + width]`, a scalar (the usual
+/// integrator) without the slice loop's set-up, which costs several times
+/// the copy.
+#[inline]
+fn copy(from: &[f64], start: usize, to: &mut [f64], at: usize, width: usize) {
+    if width == 1 {
+        to[at] = from[start];
+    } else {
+        to[at..at + width].copy_from_slice(&from[start..start + width]);
     }
 }
 
