@@ -392,6 +392,10 @@ pub trait Block: std::any::Any + Send + dyn_clone::DynClone {
     /// Whether [`Block::update`] does anything. A block without discrete
     /// state or major-step memory returns false, and the scheduler then
     /// skips it in the update pass (a call saved per block and step).
+    /// Returning false also promises that `output` depends on t, the
+    /// states and the inputs alone (besides modes under zero crossings):
+    /// a solver step's first stage, at the (t, x) the major step has just
+    /// computed, then reuses the block's outputs instead of calling it.
     fn updates(&self) -> bool {
         true
     }
