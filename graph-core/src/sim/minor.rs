@@ -17,8 +17,9 @@ pub(super) struct Minor<'a> {
     /// start: the continuous visits the first stage must still run there
     /// ([`stale_at_start`]). Taken by that stage.
     pub(super) at_start: Option<&'a [Visit]>,
-    /// The integrated blocks: those called for their derivatives, and
-    /// the plain integrators, whose derivatives are their inputs.
+    /// The integrated blocks: those called for their derivatives
+    /// (`stateful`), and the plain integrators, whose derivatives are
+    /// their inputs (`integrands`).
     pub(super) stateful: &'a [usize],
     pub(super) integrands: &'a [Integrand],
     pub(super) t_end: f64,
@@ -26,6 +27,7 @@ pub(super) struct Minor<'a> {
 
 impl Minor<'_> {
     /// Continuous outputs at (t, x), modes frozen.
+    #[inline(always)]
     pub(super) fn outputs(&mut self, t: f64, x: &[f64]) {
         for integrator in self.integrands {
             integrator.output(x, self.signals);
@@ -35,6 +37,7 @@ impl Minor<'_> {
 
     /// The outputs of `visits` at (t, x), modes frozen (the plain
     /// integrators' already copied).
+    #[inline(always)]
     fn run(&mut self, visits: &[Visit], t: f64, x: &[f64]) {
         let m = &mut *self.model;
         let left = t >= self.t_end;
@@ -59,6 +62,7 @@ impl Minor<'_> {
     }
 
     /// The stateful blocks' derivatives at (t, x), outputs computed.
+    #[inline(always)]
     fn stateful_derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
         let m = &mut *self.model;
         let left = t >= self.t_end;
@@ -95,17 +99,26 @@ impl OdeSystem for Minor<'_> {
 /// step has just computed them, may differ in the solver's first stage:
 /// blocks with memory their `update` changes after the major step's
 /// outputs (a clamped PID, a delay's history), blocks with modes or
-/// zero crossings (frozen in minor steps), and every block downstream of
-/// one. The others — a [`crate::block::Block`] without `update` or zero crossings
-/// computes its outputs from t, its states and its inputs alone — would
-/// compute the same values again.
+/// zero crossings (frozen in minor steps), and every block that reads one
+/// through a direct-feedthrough input, directly or not. The others would
+/// compute the same values again: a block without `update` or zero
+/// crossings computes its outputs from t, its states and its inputs alone
+/// ([`crate::block::Block::updates`]).
 pub(super) fn stale_at_start(model: &Model, continuous: &[Visit]) -> Vec<Visit> {
+    // Inputs without direct feedthrough do not reach the outputs.
+    let mut feeds = vec![true; model.in_ports.len()];
+    for e in model.edges.iter().filter(|e| !e.feedthrough) {
+        feeds[model.slots[e.dst].inputs.start + e.dst_port] = false;
+    }
+    // Marks spread in execution order, which every feedthrough edge follows.
     let mut stale = vec![false; model.signal_len];
     let mut runs = |v: &&Visit| {
         let (block, slot) = (&model.blocks[v.block], &model.slots[v.block]);
         let own = block.updates() || block.num_zero_crossings() > 0 || block.needs_major_step();
-        let reads_stale =
-            model.in_ports[slot.inputs.clone()].iter().any(|p| stale[p.offset..p.offset + p.width].contains(&true));
+        let reads_stale = slot.inputs.clone().any(|k| {
+            let p = model.in_ports[k];
+            feeds[k] && stale[p.offset..p.offset + p.width].contains(&true)
+        });
         if own || reads_stale {
             for p in &model.out_ports[slot.outputs.clone()] {
                 stale[p.offset..p.offset + p.width].fill(true);
