@@ -2,19 +2,10 @@
 //! every block once, with no two boxes overlapping, and wires between
 //! the right ports.
 
+mod common;
+use common::bundled_graphs;
 use ctlgraph::diagram::{Diagram, build, to_svg};
-use std::path::{Path, PathBuf};
-
-fn graph_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            graph_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "yaml") {
-            out.push(path);
-        }
-    }
-}
+use std::path::Path;
 
 fn overlapping(d: &Diagram) -> Option<(String, String)> {
     for (i, a) in d.nodes.iter().enumerate() {
@@ -30,9 +21,7 @@ fn overlapping(d: &Diagram) -> Option<(String, String)> {
 
 #[test]
 fn every_bundled_graph_is_drawn_whole_without_overlaps() {
-    let mut files = Vec::new();
-    graph_files(Path::new("graphs"), &mut files);
-    files.sort();
+    let files = bundled_graphs();
     let mut drawn = 0;
     for file in &files {
         let Ok(flat) = ctlgraph::core::load(file, &[]) else { continue };

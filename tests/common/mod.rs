@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use ctlgraph::record::Trace;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Runs the `ctlgraph` binary (as CI would: no progress bar).
@@ -47,4 +47,22 @@ pub fn run_block(ty: &str, params: &str, inputs: &[&ctlgraph::blocks::testing::S
         h = h.input(s);
     }
     h.run(stop).unwrap_or_else(|e| panic!("{ty} {{ {params} }}: {e}"))
+}
+
+/// Every graph file under `graphs/` (the libraries' too), sorted.
+pub fn bundled_graphs() -> Vec<PathBuf> {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                walk(&path, out);
+            } else if path.extension().is_some_and(|e| e == "yaml") {
+                out.push(path);
+            }
+        }
+    }
+    let mut found = Vec::new();
+    walk(Path::new("graphs"), &mut found);
+    found.sort();
+    found
 }

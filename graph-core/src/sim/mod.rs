@@ -130,10 +130,17 @@ impl Simulator {
             })
             .collect();
         let n = model.blocks.len();
-        let integrated = &model.between.integrated;
-        let integrands: Vec<Integrand> = integrated.iter().filter_map(|&i| Integrand::of(&model, i)).collect();
-        let mut plain = vec![false; n];
-        integrated.iter().filter(|&&i| Integrand::of(&model, i).is_some()).for_each(|&i| plain[i] = true);
+        // The integrated blocks: plain integrators, copied, and the others, called.
+        let (mut integrands, mut called, mut plain) = (Vec::new(), Vec::new(), vec![false; n]);
+        for &i in &model.between.integrated {
+            match Integrand::of(&model, i) {
+                Some(integrand) => {
+                    integrands.push(integrand);
+                    plain[i] = true;
+                }
+                None => called.push(i),
+            }
+        }
         // The output sweeps' visits; the plain integrators' outputs are copied apart.
         let visits = |blocks: &mut dyn Iterator<Item = usize>| Visit::list(&model, blocks.filter(|&i| !plain[i]));
         let minor = visits(&mut model.between.minor.iter().copied());
@@ -154,8 +161,8 @@ impl Simulator {
             stalled: 0,
             watch,
             held,
-            called: integrated.iter().copied().filter(|&i| !plain[i]).collect(),
             integrands,
+            called,
             n_integrated: model.between.n_integrated,
             updating: Visit::list(&model, (0..n).filter(|&i| model.blocks[i].updates())),
             every: visits(&mut (0..n)),
