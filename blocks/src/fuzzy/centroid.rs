@@ -178,34 +178,37 @@ trait Method {
 
 /// f = min(w_a, 1 − s) is w_a up to 1 − w_a, then 1 − s; g = min(w_b, s)
 /// is s up to w_b, then w_b. f falls and g rises, so μ = max(f, g) is f up
-/// to their crossing s* and g after it: w_a, then 1 − s from 1 − w_a to
-/// s*, then s from s* to w_b, then w_b. They cross at min(w_a, w_b, ½).
-/// With one strength zero only two pieces are left: those cells, most of
-/// the active ones, take a shorter path.
+/// to their crossing and g after it. Unless both strengths pass ½, one of
+/// the two slopes is hidden: μ is w_a up to w_a, then s up to w_b, then w_b
+/// (w_a ≤ w_b), or w_a up to 1 − w_a, then 1 − s up to 1 − w_b, then w_b —
+/// three pieces, one form for the cells of one strength zero (most of the
+/// active ones) and of two. With both past ½, μ falls to ½ at s = ½ and
+/// rises again: four pieces.
 struct MinMax;
 
 impl Method for MinMax {
     #[inline(always)]
     fn sums(cell: &Cell, wa: f64, wb: f64) -> (f64, f64) {
-        if wb == 0.0 {
-            return cell.sums([(1.0 - wa, wa, 0.0), (1.0, 1.0, -1.0)]);
+        if wa > 0.5 && wb > 0.5 {
+            return cell.sums([(1.0 - wa, wa, 0.0), (0.5, 1.0, -1.0), (wb, 0.0, 1.0), (1.0, wb, 0.0)]);
         }
-        if wa == 0.0 {
-            return cell.sums([(wb, 0.0, 1.0), (1.0, wb, 0.0)]);
-        }
-        let crossing = if wa <= wb && wa <= 0.5 {
-            wa
-        } else if wb <= wa && wb <= 0.5 {
-            1.0 - wb
+        let rising = wa <= wb;
+        // Where the slope starts and ends, and the slope as α + β·i on the
+        // cell's points (s = s_first + i·per_point).
+        let (ends, alpha, beta) = if rising {
+            ([wa, wb], cell.s_first, cell.per_point)
         } else {
-            0.5
+            ([1.0 - wa, 1.0 - wb], 1.0 - cell.s_first, -cell.per_point)
         };
-        cell.sums([
-            (if 1.0 - wa < crossing { 1.0 - wa } else { crossing }, wa, 0.0),
-            (crossing, 1.0, -1.0),
-            (if wb > crossing { wb } else { crossing }, 0.0, 1.0),
-            (1.0, wb, 0.0),
-        ])
+        // A zero strength's piece is empty or zero: the slope runs from the
+        // cell's start or to its end, with no point dropped by rounding there.
+        let n1 = if wa > 0.0 { cell.below(ends[0]) } else { (0.0, 0.0, 0.0) };
+        let n2 = if wb > 0.0 { cell.below(ends[1]) } else { cell.len_sums };
+        let n3 = cell.len_sums;
+        let slope = (n2.0 - n1.0, n2.1 - n1.1, n2.2 - n1.2);
+        let z0 = wa * n1.0 + (alpha * slope.0 + beta * slope.1) + wb * (n3.0 - n2.0);
+        let z1 = wa * n1.1 + (alpha * slope.1 + beta * slope.2) + wb * (n3.1 - n2.1);
+        (z0, z1)
     }
 
     fn at(wa: f64, wb: f64, s: f64) -> f64 {
