@@ -127,8 +127,11 @@ impl PartitionCentroid {
                 let (a, span) = (at(p[0]), at(p[1]) - at(p[0]));
                 let (start, end) = (start.max(1.0), end.min(last));
                 let (len, offset, per_point) = ((end - start).max(0.0), start - a, 1.0 / span);
-                let (s_first, len_sums, rises) = (offset * per_point, sums_below(len), len > 0.0 && end - 1.0 > a);
-                Cell { start, len, offset_less_half: offset - 0.5, span, per_point, s_first, len_sums, rises }
+                let (s_first, rises) = (offset * per_point, len > 0.0 && end - 1.0 > a);
+                let table: Box<[_]> = (0..=len as usize).map(|n| sums_below(n as f64)).collect();
+                let (len_sums, top) = (table[len as usize], len as i32);
+                let offset_less_half = offset - 0.5;
+                Cell { start, len, top, offset_less_half, span, per_point, s_first, len_sums, sums_below: table, rises }
             })
             .collect();
         Some(PartitionCentroid { cells, ends, last, lo: v.lo, hi: v.hi, implication, aggregation })
@@ -143,6 +146,11 @@ impl PartitionCentroid {
             (Implication::Product, Aggregation::Max) => self.centroid_of::<ProductMax>(strength),
             (Implication::Product, Aggregation::Sum) => self.centroid_of::<ProductSum>(strength),
         }
+    }
+
+    /// The universe's midpoint: the output when no rule fires.
+    pub(super) fn midpoint(&self) -> f64 {
+        (self.lo + self.hi) / 2.0
     }
 
     fn centroid_of<M: Method>(&self, strength: &[f64]) -> Option<f64> {
@@ -252,10 +260,12 @@ impl Method for ProductSum {
 /// them from index `start` (the first at or after p, and at least 1), at
 /// s = (i + offset)/span for the i-th, span = (q − p)/dx. Edges are found
 /// once, so neighbouring cells agree on which grid points are whose.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Cell {
     start: f64,
     len: f64,
+    /// `len` as an index.
+    top: i32,
     /// offset − ½ (`below` rounds to the nearest whole number).
     offset_less_half: f64,
     span: f64,
@@ -265,6 +275,10 @@ struct Cell {
     s_first: f64,
     /// `sums_below(len)`.
     len_sums: (f64, f64, f64),
+    /// `sums_below(n)` for n = 0 … len: looked up, not computed, in `below`
+    /// (a few floating-point operations and a division fewer per
+    /// breakpoint, in the evaluation's longest chain).
+    sums_below: Box<[(f64, f64, f64)]>,
     /// Whether some point lies past p (where the rising term is nonzero).
     rises: bool,
 }
@@ -301,10 +315,11 @@ impl Cell {
         // are one apart). A point exactly on the end may fall on either
         // side: the pieces meet there. Not `f64::ceil`: on baseline x86-64
         // (no SSE4.1) that is a libm call costing more than the rest.
+        // The whole number is then in the sum's low bits, two's complement
+        // (|position| < 2³¹: `to` is in [0, 1], span below 2·10⁵).
         const ROUND: f64 = 6_755_399_441_055_744.0;
-        let n = ((to * self.span - self.offset_less_half) + ROUND) - ROUND;
-        let n = if n > 0.0 { n } else { 0.0 };
-        sums_below(if n < self.len { n } else { self.len })
+        let n = ((to * self.span - self.offset_less_half) + ROUND).to_bits() as u32 as i32;
+        self.sums_below[n.clamp(0, self.top) as usize]
     }
 }
 

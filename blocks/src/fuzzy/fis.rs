@@ -279,7 +279,15 @@ impl Fis {
             }
         }
         for (o, yo) in y.iter_mut().enumerate().take(self.outputs.len()) {
-            *yo = if self.sugeno { self.sugeno_output(o) } else { self.mamdani_output(o) };
+            *yo = match (&self.exact[o], by_term) {
+                // The closed-form centroid from the term strengths.
+                (Some(exact), true) => {
+                    let strength = &self.term_strength[self.term_offsets[o]..self.term_offsets[o + 1]];
+                    exact.centroid(strength).unwrap_or(exact.midpoint())
+                }
+                _ if self.sugeno => self.sugeno_output(o),
+                _ => self.mamdani_output(o),
+            };
         }
     }
 
@@ -356,16 +364,12 @@ impl Fis {
     /// Per term T, max_r imp(w_r, μ_T) = imp(max_r w_r, μ_T) over the rules
     /// concluding T (implication is monotone) and Σ_r w_r·μ_T = (Σ_r w_r)·μ_T,
     /// so the grid is visited once per firing term, not once per rule; only
-    /// sum aggregation of min implication needs the rules one by one. When
-    /// the output's terms are a triangular partition, the centroid comes in
-    /// closed form from the term strengths instead (see `centroid`).
+    /// sum aggregation of min implication needs the rules one by one. (When
+    /// the output's terms are a triangular partition, `eval` takes the
+    /// centroid in closed form from the term strengths instead: `centroid`.)
     fn mamdani_output(&mut self, o: usize) -> f64 {
         let by_term = self.methods.by_term();
         let midpoint = (self.outputs[o].lo + self.outputs[o].hi) / 2.0;
-        if let (true, Some(exact)) = (by_term, &self.exact[o]) {
-            let strength = &self.term_strength[self.term_offsets[o]..self.term_offsets[o + 1]];
-            return exact.centroid(strength).unwrap_or(midpoint);
-        }
         let Fis {
             fired,
             n_fired,

@@ -125,7 +125,16 @@ impl RuleGrid {
         // in the general loop's order and with its arithmetic.
         if let ([p0, p1], [s0, s1], [x0, x1]) = (partitions, strides, x) {
             let ((k0, a0, b0), (k1, a1, b1)) = (p0.locate(*x0), p1.locate(*x1));
-            let and = |u: f64, v: f64| if product { u * v } else { u.min(v) };
+            // A plain comparison: memberships are never NaN.
+            let and = |u: f64, v: f64| {
+                if product {
+                    u * v
+                } else if u < v {
+                    u
+                } else {
+                    v
+                }
+            };
             visit(k0 * s0 + k1 * s1, and(a0, a1));
             visit((k0 + 1) * s0 + k1 * s1, and(b0, a1));
             visit(k0 * s0 + (k1 + 1) * s1, and(a0, b1));
