@@ -36,6 +36,7 @@ impl Partition {
 
     /// The k with peak k ≤ x < peak k+1 (k ≤ n − 2), and the memberships of
     /// terms k and k+1 at x, as `Mf::eval` computes them.
+    #[inline(always)]
     pub(super) fn locate(&self, x: f64) -> (usize, f64, f64) {
         let p = &self.peaks;
         let last = p.len() - 2;
