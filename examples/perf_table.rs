@@ -166,12 +166,15 @@ pub fn tables(root: &Path) -> Result<String, String> {
         ],
     )?;
     out.push_str(
-        "\n| n | compile, chain | compile, fan-out (2n blocks) | ns per block-step, chain (RK4) |\n|---|---|---|---|\n",
+        "\n| n | compile, chain | compile, fan-out (2n blocks) | ns per block-step, chain (RK4) | the chain by hand |\n|---|---|---|---|---|\n",
     );
     for n in [10u32, 1_000, 100_000] {
         let (chain, fan) = (m(&format!("chain_compile/{n}"))?, m(&format!("fan_out_compile/{n}"))?);
-        let step = m(&format!("chain_100_steps/{n}"))? / (SCALING_STEPS * f64::from(n)) * 1e9;
-        out.push_str(&format!("| {} | {} | {} | {step:.0} |\n", grouped(f64::from(n)), duration(chain), duration(fan)));
+        let per_block_step = |run: f64| run / (SCALING_STEPS * f64::from(n)) * 1e9;
+        let step = per_block_step(m(&format!("chain_100_steps/{n}"))?);
+        let by_hand = per_block_step(m(&format!("chain_by_hand_100_steps/{n}"))?);
+        let (n, chain, fan) = (grouped(f64::from(n)), duration(chain), duration(fan));
+        out.push_str(&format!("| {n} | {chain} | {fan} | {step:.0} | {by_hand:.1} |\n"));
     }
     let (one, two) = (m("pid_loop_sweep_400_cases/jobs_1")?, m("pid_loop_sweep_400_cases/jobs_2")?);
     out.push_str(&format!(
