@@ -420,10 +420,10 @@ impl Integrator {
         }
     }
 
-    fn eval(&mut self, sys: &mut dyn OdeSystem, stage: usize, t: f64, from_tmp: bool, x: &[f64]) {
+    /// A later stage: f at `t` and the stage's point in `tmp`.
+    fn eval(&mut self, sys: &mut dyn OdeSystem, stage: usize, t: f64) {
         self.stats.evaluations += 1;
-        let src = if from_tmp { &self.tmp[..] } else { x };
-        sys.derivatives(t, src, &mut self.k[stage]);
+        sys.derivatives(t, &self.tmp, &mut self.k[stage]);
     }
 
     /// The first stage, at the point `advance` was given.
@@ -449,7 +449,7 @@ impl Integrator {
         let h = t_end - t;
         self.eval_start(sys, t, x);
         self.stage(x, h, &[(0, 1.0)]);
-        self.eval(sys, 1, t_end, true, x);
+        self.eval(sys, 1, t_end);
         for i in 0..x.len() {
             x[i] += 0.5 * h * (self.k[0][i] + self.k[1][i]);
         }
@@ -459,11 +459,11 @@ impl Integrator {
         let h = t_end - t;
         self.eval_start(sys, t, x);
         self.stage(x, h, &[(0, 0.5)]);
-        self.eval(sys, 1, t + 0.5 * h, true, x);
+        self.eval(sys, 1, t + 0.5 * h);
         self.stage(x, h, &[(1, 0.5)]);
-        self.eval(sys, 2, t + 0.5 * h, true, x);
+        self.eval(sys, 2, t + 0.5 * h);
         self.stage(x, h, &[(2, 1.0)]);
-        self.eval(sys, 3, t_end, true, x);
+        self.eval(sys, 3, t_end);
         let n = x.len();
         let (k0, k1, k2, k3) = (&self.k[0][..n], &self.k[1][..n], &self.k[2][..n], &self.k[3][..n]);
         for i in 0..n {
@@ -512,15 +512,15 @@ impl Integrator {
         loop {
             let (landing, t_new) = trial_step(t, t_limit, &mut h, self.worst)?;
             self.stage(x, h, &[(0, A21)]);
-            self.eval(sys, 1, t + C2 * h, true, x);
+            self.eval(sys, 1, t + C2 * h);
             self.stage(x, h, &[(0, A31), (1, A32)]);
-            self.eval(sys, 2, t + C3 * h, true, x);
+            self.eval(sys, 2, t + C3 * h);
             self.stage(x, h, &[(0, A41), (1, A42), (2, A43)]);
-            self.eval(sys, 3, t + C4 * h, true, x);
+            self.eval(sys, 3, t + C4 * h);
             self.stage(x, h, &[(0, A51), (1, A52), (2, A53), (3, A54)]);
-            self.eval(sys, 4, t + C5 * h, true, x);
+            self.eval(sys, 4, t + C5 * h);
             self.stage(x, h, &[(0, A61), (1, A62), (2, A63), (3, A64), (4, A65)]);
-            self.eval(sys, 5, t_new, true, x);
+            self.eval(sys, 5, t_new);
             self.stage(x, h, &[(0, A71), (2, A73), (3, A74), (4, A75), (5, A76)]);
             self.x_new.copy_from_slice(&self.tmp);
             self.stats.evaluations += 1;
@@ -568,7 +568,7 @@ impl Integrator {
         let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
         let h0 = h0.min(max_step);
         self.stage(x, h0, &[(0, 1.0)]);
-        self.eval(sys, 1, t + h0, true, x);
+        self.eval(sys, 1, t + h0);
         let mut d2 = 0.0;
         for i in 0..x.len() {
             let sc = atol + rtol * x[i].abs();
