@@ -84,6 +84,30 @@ fn scalar_sums_and_gains_run_in_place_as_their_blocks_would() {
 }
 
 #[test]
+fn a_run_of_kernels_carries_each_output_to_the_next() {
+    // Consecutive kernels run in one loop that hands each output to the
+    // next in a register (`Inline::run_all`): a sum reading the gain before
+    // it as its first input, a sum reading the sum before it as its second,
+    // a gain after them, and a demux's copy inside a later run. Every value
+    // is exact (doublings and halvings of t), in major and minor steps.
+    let yaml = graph(
+        "  k: { type: clock }\n  g1: { type: gain, k: 2 }\n  s1: { type: sum, signs: \"+-\" }\n\
+         \x20 s2: { type: sum, signs: \"++\" }\n  g2: { type: gain, k: -0.5 }\n\
+         \x20 m: { type: mux, widths: [1, 1] }\n  d: { type: demux, widths: [1, 1] }\n\
+         \x20 g3: { type: gain, k: 4 }\n  x: { type: integrator }\n",
+        "k -> g1, g1 -> s1.u1, k -> s1.u2, k -> s2.u1, s1 -> s2.u2, s2 -> g2, g2 -> m.u1, k -> m.u2, m -> d, \
+         d.y1 -> g3, g3 -> x",
+        "s1, s2, g2, g3, x",
+    );
+    let trace = run(&yaml);
+    assert_eq!(max_error(&trace, "s1", |t| t), 0.0);
+    assert_eq!(max_error(&trace, "s2", |t| 2.0 * t), 0.0);
+    assert_eq!(max_error(&trace, "g2", |t| -t), 0.0);
+    assert_eq!(max_error(&trace, "g3", |t| -4.0 * t), 0.0);
+    assert!(max_error(&trace, "x", |t| -2.0 * t * t) < 1e-12);
+}
+
+#[test]
 fn demuxes_copy_in_place_in_major_and_minor_steps() {
     // A demux runs as a copy on the signal buffer (`Kernel::Copy`), also
     // in RK4's stages, where the integrator reads its second output: x' = 3t

@@ -4,7 +4,8 @@
 //! and whatever reads them). That must change nothing: every bundled graph
 //! runs the same, to the bit, as when each step's first stage recomputes
 //! every output — forced here by restoring a snapshot between a major
-//! step's outputs and its advance, which leaves nothing to reuse.
+//! step's outputs and its advance, which leaves nothing to reuse. Blocks
+//! whose outputs are a function of time alone run once per time.
 
 mod common;
 use common::bundled_graphs;
@@ -69,5 +70,75 @@ fn assert_same(what: &str, with: &[(u64, Vec<u64>)], without: &[(u64, Vec<u64>)]
     assert_eq!(with.len(), without.len(), "{what}: major steps");
     for (k, (a, b)) in with.iter().zip(without).enumerate() {
         assert_eq!(a, b, "{what}: major step {k} differs");
+    }
+}
+
+/// A time-only block (`Block::time_only`) runs once per time: under RK4 at
+/// t + h/2 (the two middle stages) and at t + h (the last stage, whose
+/// outputs the next major step keeps) — unless it is sided, when the last
+/// stage's left limit and the major step's time are two times.
+#[test]
+fn a_time_only_block_runs_once_per_time() {
+    use ctlgraph::core::registry::{BlockType, Built};
+    use ctlgraph::core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    /// y = t, counting its calls.
+    #[derive(Clone)]
+    struct Counted(&'static AtomicUsize, bool);
+    impl Block for Counted {
+        fn output(&mut self, io: &mut Io) {
+            self.0.fetch_add(1, Ordering::Relaxed);
+            io.set(0, io.t);
+        }
+        fn time_only(&self) -> Option<bool> {
+            Some(self.1)
+        }
+    }
+    /// The two blocks' counters: unsided, sided.
+    static CALLS: [AtomicUsize; 2] = [AtomicUsize::new(0), AtomicUsize::new(0)];
+    fn counted(sided: bool) -> Result<Built, Diagnostic> {
+        let block = Counted(&CALLS[usize::from(sided)], sided);
+        Ok(Built::new(block, Interface::new(SampleTime::Continuous).output("y", Width::Fixed(1))))
+    }
+    let mut reg = ctlgraph::registry();
+    for (name, build) in [
+        ("counted", (|_: &mut Params| counted(false)) as fn(&mut Params) -> Result<Built, Diagnostic>),
+        ("counted_sided", |_: &mut Params| counted(true)),
+    ] {
+        reg.register(BlockType {
+            name,
+            category: "test",
+            summary: "y = t, counting its calls",
+            doc: "test",
+            inputs: &[],
+            outputs: &[],
+            params: &[],
+            build,
+        });
+    }
+    for (sided, per_step) in [(false, 2), (true, 3)] {
+        let yaml = format!(
+            "simulation: {{ stop: 1.0, solver: {{ method: rk4, step: 0.01 }} }}\n\
+             blocks:\n  u: {{ type: {} }}\n  x: {{ type: integrator }}\nwires:\n  - u -> x\n",
+            if sided { "counted_sided" } else { "counted" }
+        );
+        let flat = ctlgraph::core::load_str(&yaml, "counted.yaml".into(), &[]).unwrap();
+        let model = ctlgraph::core::compile(&flat, &reg).unwrap();
+        let mut sim = Simulator::new(model, None);
+        let calls = &CALLS[usize::from(sided)];
+        calls.store(0, Ordering::Relaxed);
+        let mut steps = 0;
+        loop {
+            sim.outputs().unwrap();
+            if sim.finished() {
+                break;
+            }
+            sim.advance().unwrap();
+            steps += 1;
+        }
+        assert_eq!(steps, 100);
+        assert_eq!(calls.load(Ordering::Relaxed), 1 + per_step * steps, "sided: {sided}");
+        // x = t²/2, which RK4 integrates exactly.
+        assert!((sim.states()[0] - 0.5).abs() < 1e-14, "x(1) = {}", sim.states()[0]);
     }
 }

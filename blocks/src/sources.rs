@@ -105,7 +105,10 @@ struct TimeFn<F: Fn(&Io) -> f64 + Send + Clone> {
     /// there), and the value. A source is asked for the same time several
     /// times a step — RK4's two middle stages share one, its last stage's
     /// is the next major step's — and f may be costly (a `sin`): RK4 then
-    /// evaluates it twice a step instead of five times.
+    /// evaluates it twice a step instead of five times. The interpreter's
+    /// sweeps skip the call itself at a time already seen
+    /// ([`Block::time_only`]); this serves the callers that do not, a
+    /// generated step's.
     last: (u64, bool, f64),
 }
 
@@ -120,6 +123,9 @@ impl<F: Fn(&Io) -> f64 + Send + Clone + 'static> Block for TimeFn<F> {
     }
     fn initialize(&mut self, _x0: &mut [f64]) {
         self.last = Self::NONE;
+    }
+    fn time_only(&self) -> Option<bool> {
+        Some(!self.events.is_empty())
     }
     fn output(&mut self, io: &mut Io) {
         let key = (io.t.to_bits(), !self.events.is_empty() && !io.reached(io.t));
@@ -168,6 +174,10 @@ impl Block for Windowed {
     }
     fn initialize(&mut self, x0: &mut [f64]) {
         self.inner.initialize(x0);
+    }
+    /// The window's edges are events.
+    fn time_only(&self) -> Option<bool> {
+        self.inner.time_only().map(|_| true)
     }
     fn output(&mut self, io: &mut Io) {
         if io.reached(self.on) && !io.reached(self.off) {
@@ -224,6 +234,9 @@ fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
         }
         fn output(&mut self, io: &mut Io) {
             io.set_all(0, &self.0);
+        }
+        fn time_only(&self) -> Option<bool> {
+            Some(false)
         }
     }
     let iface = Interface::new(SampleTime::Constant).output("y", Width::Fixed(value.len()));
@@ -289,6 +302,9 @@ impl Block for Pulse {
     rust_type!(Pulse);
     fn updates(&self) -> bool {
         false
+    }
+    fn time_only(&self) -> Option<bool> {
+        Some(true)
     }
     fn output(&mut self, io: &mut Io) {
         let k = self.index(io.t);

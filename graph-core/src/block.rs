@@ -386,6 +386,17 @@ pub trait Block: std::any::Any + Send + dyn_clone::DynClone {
         None
     }
 
+    /// `Some(sided)` when the outputs are a function of time alone (no
+    /// inputs, states or memory that changes): the scheduler then calls
+    /// `output` once per time and keeps its outputs while it is asked again
+    /// at that time (RK4's two middle stages share one; its last stage's
+    /// is the next major step's). `sided`: the outputs may jump at the
+    /// block's events ([`Io::reached`]), so a time's left limit counts as
+    /// another time.
+    fn time_only(&self) -> Option<bool> {
+        None
+    }
+
     /// Advances discrete state (or major-step memory) after outputs.
     fn update(&mut self, _io: &mut Io) {}
 

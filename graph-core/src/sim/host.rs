@@ -199,6 +199,7 @@ impl Simulator {
         (self.major_steps, self.stalled, self.watch, self.held) = (s.major_steps, s.stalled, s.watch, s.held);
         (self.at_event, self.inputs_changed) = (s.at_event, s.inputs_changed);
         self.outputs_current = false;
+        self.computed_at.forget();
         Ok(())
     }
 }

@@ -2,7 +2,7 @@
 //! outputs recomputed at each stage, discrete outputs held.
 
 use super::io_for;
-use super::visit::{Integrand, Visit};
+use super::visit::{ComputedAt, Inline, Integrand, Visit};
 use crate::compile::Model;
 use ctlgraph_solver::OdeSystem;
 
@@ -22,6 +22,7 @@ pub(super) struct Minor<'a> {
     /// their inputs (`integrands`).
     pub(super) stateful: &'a [usize],
     pub(super) integrands: &'a [Integrand],
+    pub(super) computed_at: &'a mut ComputedAt,
     pub(super) t_end: f64,
 }
 
@@ -41,9 +42,14 @@ impl Minor<'_> {
     fn run(&mut self, visits: &[Visit], t: f64, x: &[f64]) {
         let m = &mut *self.model;
         let left = t >= self.t_end;
-        for v in visits {
-            if let Some(kernel) = &v.kernel {
-                kernel.run(self.signals);
+        let mut rest = visits;
+        while let [v, after @ ..] = rest {
+            if v.kernel.is_some() {
+                rest = Inline::run_from(rest, self.signals, |_| true);
+                continue;
+            }
+            rest = after;
+            if !self.computed_at.must_run(v, t, left) {
                 continue;
             }
             let meta = &m.slots[v.block];

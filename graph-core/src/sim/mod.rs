@@ -29,7 +29,7 @@ pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
 use minor::{Minor, stale_at_start};
 use std::ops::Range;
-use visit::{Integrand, Visit};
+use visit::{ComputedAt, Inline, Integrand, Visit};
 
 /// Counters for the run report.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -87,6 +87,8 @@ pub struct Simulator {
     /// set by a major step's outputs, cleared by anything that could
     /// change a signal or state before the step is taken.
     stale_at_start: Vec<Visit>,
+    /// When the time-only blocks last ran, to skip them at the same time.
+    computed_at: ComputedAt,
     outputs_current: bool,
     /// Whether this major step is at a block event (see `Between::event_only`).
     at_event: bool,
@@ -171,6 +173,7 @@ impl Simulator {
             ),
             minor,
             stale_at_start: stale,
+            computed_at: ComputedAt::new(n),
             outputs_current: false,
             at_event: true,
             inputs_changed: false,
@@ -190,6 +193,7 @@ impl Simulator {
         self.major_steps = 0;
         self.grid.set_tick(1);
         self.signals.iter_mut().for_each(|s| *s = 0.0);
+        self.computed_at.forget();
         for (b, m) in self.model.blocks.iter_mut().zip(&self.model.slots) {
             b.initialize(&mut self.x[m.states.clone()]);
         }
@@ -280,16 +284,20 @@ impl Simulator {
         for integrator in &self.integrands {
             integrator.output(&self.x, &mut self.signals);
         }
-        for v in order {
-            if due(v.rate, &self.clocks, self.first) {
-                if let Some(kernel) = &v.kernel {
-                    kernel.run(&mut self.signals);
-                    continue;
-                }
-                let slot = &m.slots[v.block];
-                let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
-                m.blocks[v.block].output(&mut io);
+        let (clocks, first) = (&self.clocks, self.first);
+        let mut rest = &order[..];
+        while let [v, after @ ..] = rest {
+            if v.kernel.is_some() {
+                rest = Inline::run_from(rest, &mut self.signals, |v| due(v.rate, clocks, first));
+                continue;
             }
+            rest = after;
+            if !due(v.rate, clocks, first) || !self.computed_at.must_run(v, self.t, false) {
+                continue;
+            }
+            let slot = &m.slots[v.block];
+            let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
+            m.blocks[v.block].output(&mut io);
         }
     }
 
@@ -364,6 +372,7 @@ impl Simulator {
             at_start: current.then_some(&self.stale_at_start[..]),
             stateful: &self.called,
             integrands: &self.integrands,
+            computed_at: &mut self.computed_at,
             t_end: target,
         };
         let x = &mut self.x[..self.n_integrated];

@@ -14,13 +14,57 @@ pub(super) struct Visit {
     pub(super) rate: Rate,
     /// Run in place of the block's `output`.
     pub(super) kernel: Option<Inline>,
+    /// [`crate::block::Block::time_only`].
+    pub(super) time_only: Option<bool>,
 }
 
 impl Visit {
     /// Visits of `blocks`, in their order.
     pub(super) fn list(model: &Model, blocks: impl IntoIterator<Item = usize>) -> Vec<Visit> {
-        let visit = |block| Visit { block, rate: model.slots[block].rate, kernel: Inline::of(model, block) };
+        let visit = |block| Visit {
+            block,
+            rate: model.slots[block].rate,
+            kernel: Inline::of(model, block),
+            time_only: model.blocks[block].time_only(),
+        };
         blocks.into_iter().map(visit).collect()
+    }
+}
+
+/// When each time-only block ([`crate::block::Block::time_only`]) last
+/// computed its outputs, which stand in the signal buffer until it runs
+/// again: the time's bits, and whether it was taken as a left limit (for
+/// a sided block). Asked again there, the sweeps skip the block: no view
+/// to build, no call.
+#[derive(Clone, Debug)]
+pub(super) struct ComputedAt(Vec<(u64, bool)>);
+
+impl ComputedAt {
+    /// No time's bits are NaN's.
+    const NEVER: (u64, bool) = (u64::MAX, false);
+
+    pub(super) fn new(blocks: usize) -> Self {
+        ComputedAt(vec![Self::NEVER; blocks])
+    }
+
+    /// After the signals or the blocks changed other than by a sweep.
+    pub(super) fn forget(&mut self) {
+        self.0.fill(Self::NEVER);
+    }
+
+    /// Whether `v` must run at `t` (seen as a left limit if `left`): not
+    /// when it is time-only and last ran there. Records the time when it
+    /// runs.
+    #[inline(always)]
+    pub(super) fn must_run(&mut self, v: &Visit, t: f64, left: bool) -> bool {
+        let Some(sided) = v.time_only else { return true };
+        let key = (t.to_bits(), sided && left);
+        let last = &mut self.0[v.block];
+        if *last == key {
+            return false;
+        }
+        *last = key;
+        true
     }
 }
 
@@ -119,11 +163,67 @@ impl Inline {
         suits.then_some(Inline { kernel, u0: first.offset, u1: last.offset, y, width })
     }
 
-    #[inline]
-    pub(super) fn run(&self, signals: &mut [f64]) {
+    /// Runs the kernel of `visits[0]` (when `due` says), or, when a kernel
+    /// follows it, the run of kernels from it ([`Inline::run_all`], a call
+    /// that pays off from two kernels on); returns the visits after.
+    #[inline(always)]
+    pub(super) fn run_from<'v>(visits: &'v [Visit], signals: &mut [f64], due: impl Fn(&Visit) -> bool) -> &'v [Visit] {
+        match visits {
+            [_, next, ..] if next.kernel.is_some() => &visits[Self::run_all(visits, signals, due)..],
+            [v, after @ ..] => {
+                if let Some(k) = &v.kernel
+                    && due(v)
+                {
+                    k.run(signals);
+                }
+                after
+            }
+            [] => visits,
+        }
+    }
+
+    /// The kernel on the buffer, its inputs read from it.
+    #[inline(always)]
+    fn run(&self, signals: &mut [f64]) {
         match self.kernel {
             Kernel::Copy => signals.copy_within(self.u0..self.u0 + self.width, self.y),
             kernel => signals[self.y] = kernel.eval(signals[self.u0], signals[self.u1]),
         }
+    }
+
+    /// Runs the kernels of `visits` from the first, up to the first visit
+    /// without one (those `due` says; the others keep their outputs), and
+    /// returns how many visits it passed.
+    ///
+    /// The last scalar output stays in a register for the next kernel: in a
+    /// chain of small blocks each reads what the one before has just
+    /// written, and reading it back from the signal buffer puts a
+    /// store-to-load forwarding (a dozen cycles) on every link of the chain
+    /// — twice the kernel's own cost. Every signal has one writer, so the
+    /// value is the buffer's until the run ends.
+    #[inline]
+    fn run_all(visits: &[Visit], signals: &mut [f64], due: impl Fn(&Visit) -> bool) -> usize {
+        let (mut at, mut last) = (usize::MAX, 0.0);
+        for (i, v) in visits.iter().enumerate() {
+            let Some(k) = &v.kernel else { return i };
+            if !due(v) {
+                continue;
+            }
+            if let Kernel::Copy = k.kernel {
+                k.run(signals);
+                // Nothing carried over the copy (a call), so nothing to spill.
+                (at, last) = (usize::MAX, 0.0);
+                continue;
+            }
+            let read = |u: usize| if u == at { last } else { signals[u] };
+            // A gain reads one input (u1 is u0's copy), not two.
+            last = match k.kernel {
+                Kernel::Scale(_) => k.kernel.eval(read(k.u0), 0.0),
+                _ => k.kernel.eval(read(k.u0), read(k.u1)),
+            };
+            signals[k.y] = last;
+            at = k.y;
+        }
+        visits.len()
     }
 }
