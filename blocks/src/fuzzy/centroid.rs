@@ -14,7 +14,7 @@
 //!   centroid = lo + dx·(S1 + μ_0/6 − μ_L·(L/2 + 1/6)) / (S0 − (μ_0 + μ_L)/2)
 
 use super::fis::{Aggregation, Implication};
-use super::partition::Partition;
+use super::partition::{Partition, nearest_whole};
 use super::terms::Variable;
 use std::ops::Range;
 
@@ -44,15 +44,17 @@ pub(super) fn centroid_on_grid(mu: &[f64], range: Range<usize>, lo: f64, hi: f64
         moment += index[k] * v;
     }
     // Σ j·μ_j with j = from + local index.
-    trapezoid_centroid(sum, from * sum + moment, first_value, last_value, lo, hi, last as f64)
+    let l = last as f64;
+    trapezoid_centroid(sum, from * sum + moment, first_value, last_value, lo, (hi - lo) / l, l)
 }
 
 /// The formula of the module's doc from S0 = Σ μ_j, S1 = Σ j·μ_j and the
-/// end samples μ_0, μ_L; `None` when the area is zero.
-fn trapezoid_centroid(s0: f64, s1: f64, first: f64, last: f64, lo: f64, hi: f64, l: f64) -> Option<f64> {
+/// end samples μ_0, μ_L on the grid from `lo` by `dx` = (hi − lo)/L;
+/// `None` when the area is zero.
+fn trapezoid_centroid(s0: f64, s1: f64, first: f64, last: f64, lo: f64, dx: f64, l: f64) -> Option<f64> {
     let moment = s1 + first / 6.0 - last * (l / 2.0 + 1.0 / 6.0);
     let area = s0 - 0.5 * (first + last);
-    (area > 0.0).then(|| lo + (hi - lo) / l * moment / area)
+    (area > 0.0).then(|| lo + dx * moment / area)
 }
 
 /// The exact centroid of an output whose terms are a triangular partition,
@@ -85,6 +87,8 @@ pub(super) struct PartitionCentroid {
     last: f64,
     lo: f64,
     hi: f64,
+    /// The grid's step, (hi − lo)/L.
+    dx: f64,
     implication: Implication,
     aggregation: Aggregation,
 }
@@ -128,13 +132,14 @@ impl PartitionCentroid {
                 let (start, end) = (start.max(1.0), end.min(last));
                 let (len, offset, per_point) = ((end - start).max(0.0), start - a, 1.0 / span);
                 let (s_first, rises) = (offset * per_point, len > 0.0 && end - 1.0 > a);
-                let table: Box<[_]> = (0..=len as usize).map(|n| sums_below(n as f64)).collect();
-                let (len_sums, top) = (table[len as usize], len as i32);
-                let offset_less_half = offset - 0.5;
-                Cell { start, len, top, offset_less_half, span, per_point, s_first, len_sums, sums_below: table, rises }
+                let len_sums = sums_below(len);
+                let below = (0..=len as usize).map(|n| Below::new(n as f64, len_sums, s_first, per_point)).collect();
+                let (top, offset_less_half) = (len as i32, offset - 0.5);
+                Cell { start, len, top, offset_less_half, span, per_point, s_first, len_sums, below, rises }
             })
             .collect();
-        Some(PartitionCentroid { cells, ends, last, lo: v.lo, hi: v.hi, implication, aggregation })
+        let dx = (v.hi - v.lo) / last;
+        Some(PartitionCentroid { cells, ends, last, lo: v.lo, hi: v.hi, dx, implication, aggregation })
     }
 
     /// The centroid of the aggregate of the terms at `strength` (one per
@@ -171,7 +176,7 @@ impl PartitionCentroid {
             return None;
         }
         let (s0, s1) = (s0 + first + last, s1 + self.last * last);
-        trapezoid_centroid(s0, s1, first, last, self.lo, self.hi, self.last)
+        trapezoid_centroid(s0, s1, first, last, self.lo, self.dx, self.last)
     }
 }
 
@@ -197,25 +202,32 @@ struct MinMax;
 impl Method for MinMax {
     #[inline(always)]
     fn sums(cell: &Cell, wa: f64, wb: f64) -> (f64, f64) {
+        // One strength zero (most active cells): its piece is empty or zero,
+        // so the slope runs from the cell's start or to its end, with no
+        // point dropped by rounding there: one lookup.
+        let whole = cell.len_sums;
+        if wa == 0.0 {
+            let b = cell.below(wb);
+            return (b.rise.0 + wb * (whole.0 - b.n.0), b.rise.1 + wb * (whole.1 - b.n.1));
+        }
+        if wb == 0.0 {
+            let b = cell.below(1.0 - wa);
+            return (wa * b.n.0 + b.fall.0, wa * b.n.1 + b.fall.1);
+        }
         if wa > 0.5 && wb > 0.5 {
             return cell.sums([(1.0 - wa, wa, 0.0), (0.5, 1.0, -1.0), (wb, 0.0, 1.0), (1.0, wb, 0.0)]);
         }
-        let rising = wa <= wb;
-        // Where the slope starts and ends, and the slope as α + β·i on the
-        // cell's points (s = s_first + i·per_point).
-        let (ends, alpha, beta) = if rising {
-            ([wa, wb], cell.s_first, cell.per_point)
+        // w_a up to the slope's start, w_b from its end; the slope's sums
+        // are the difference of two looked up.
+        let (b1, b2, slope) = if wa <= wb {
+            let (b1, b2) = (cell.below(wa), cell.below(wb));
+            (b1, b2, (b2.rise.0 - b1.rise.0, b2.rise.1 - b1.rise.1))
         } else {
-            ([1.0 - wa, 1.0 - wb], 1.0 - cell.s_first, -cell.per_point)
+            let (b1, b2) = (cell.below(1.0 - wa), cell.below(1.0 - wb));
+            (b1, b2, (b1.fall.0 - b2.fall.0, b1.fall.1 - b2.fall.1))
         };
-        // A zero strength's piece is empty or zero: the slope runs from the
-        // cell's start or to its end, with no point dropped by rounding there.
-        let n1 = if wa > 0.0 { cell.below(ends[0]) } else { (0.0, 0.0, 0.0) };
-        let n2 = if wb > 0.0 { cell.below(ends[1]) } else { cell.len_sums };
-        let n3 = cell.len_sums;
-        let slope = (n2.0 - n1.0, n2.1 - n1.1, n2.2 - n1.2);
-        let z0 = wa * n1.0 + (alpha * slope.0 + beta * slope.1) + wb * (n3.0 - n2.0);
-        let z1 = wa * n1.1 + (alpha * slope.1 + beta * slope.2) + wb * (n3.1 - n2.1);
+        let z0 = wa * b1.n.0 + slope.0 + wb * (whole.0 - b2.n.0);
+        let z1 = wa * b1.n.1 + slope.1 + wb * (whole.1 - b2.n.1);
         (z0, z1)
     }
 
@@ -275,11 +287,11 @@ struct Cell {
     s_first: f64,
     /// `sums_below(len)`.
     len_sums: (f64, f64, f64),
-    /// `sums_below(n)` for n = 0 … len: looked up, not computed, in `below`
-    /// (a few floating-point operations and a division fewer per
-    /// breakpoint, in the evaluation's longest chain); 24 bytes a point,
-    /// 2.4 MB an output at the block's largest resolution.
-    sums_below: Box<[(f64, f64, f64)]>,
+    /// [`Below`] n = 0 … len: looked up, not computed, in `below` (a few
+    /// floating-point operations and a division fewer per breakpoint, in
+    /// the evaluation's longest chain); 56 bytes a point, 5.6 MB an output
+    /// at the block's largest resolution.
+    below: Box<[Below]>,
     /// Whether some point lies past p (where the rising term is nonzero).
     rises: bool,
 }
@@ -296,7 +308,7 @@ impl Cell {
         let (mut z0, mut z1) = (0.0, 0.0);
         let mut from = (0.0, 0.0, 0.0);
         for (p, (to, c0, c1)) in pieces.into_iter().enumerate() {
-            let end = if p + 1 < P { self.below(to) } else { self.len_sums };
+            let end = if p + 1 < P { self.below(to).n } else { self.len_sums };
             let (n, t1, t2) = (end.0 - from.0, end.1 - from.1, end.2 - from.2);
             // μ = c0 + c1·s with s = s_first + i·per_point: α + β·i.
             let (a, b) = (c0 + c1 * self.s_first, c1 * self.per_point);
@@ -310,17 +322,37 @@ impl Cell {
     /// The first point n with s ≥ `to` (0 … len), and Σ i, Σ i² over the
     /// points below it: whole numbers held in f64, exact below 2⁵³ (n up
     /// to about 200 000, beyond the block's 100 001 points).
-    fn below(&self, to: f64) -> (f64, f64, f64) {
+    #[inline(always)]
+    fn below(&self, to: f64) -> &Below {
         // The ceiling of the position, as the nearest whole number to it
-        // plus ½: adding and taking away 1.5·2⁵² rounds (there the doubles
-        // are one apart). A point exactly on the end may fall on either
-        // side: the pieces meet there. Not `f64::ceil`: on baseline x86-64
-        // (no SSE4.1) that is a libm call costing more than the rest.
-        // The whole number is then in the sum's low bits, two's complement
-        // (|position| < 2³¹: `to` is in [0, 1], span below 2·10⁵).
-        const ROUND: f64 = 6_755_399_441_055_744.0;
-        let n = ((to * self.span - self.offset_less_half) + ROUND).to_bits() as u32 as i32;
-        self.sums_below[n.clamp(0, self.top) as usize]
+        // plus ½ (|position| < 2³¹: `to` is in [0, 1], span below 2·10⁵). A
+        // point exactly on the end may fall on either side: the pieces
+        // meet there.
+        let n = nearest_whole(to * self.span - self.offset_less_half);
+        &self.below[n.clamp(0, self.top) as usize]
+    }
+}
+
+/// What a cell's points sum to on either side of point n: `n` = (n, Σ i,
+/// Σ i²) over i < n; `rise` = (Σ s_i, Σ i·s_i) over i < n (the rising
+/// term's slope up to a kink at n); `fall` = (Σ (1 − s_i), Σ i·(1 − s_i))
+/// over i ≥ n (the falling term's slope from a kink at n). A slope
+/// between two kinks is the difference of two.
+#[derive(Clone, Copy, Debug)]
+struct Below {
+    n: (f64, f64, f64),
+    rise: (f64, f64),
+    fall: (f64, f64),
+}
+
+impl Below {
+    fn new(n: f64, whole: (f64, f64, f64), s_first: f64, per_point: f64) -> Self {
+        let below = sums_below(n);
+        // μ = α + β·i, summed as α·Σ1 + β·Σi and α·Σi + β·Σi².
+        let sums =
+            |(alpha, beta): (f64, f64), (n, t1, t2): (f64, f64, f64)| (alpha * n + beta * t1, alpha * t1 + beta * t2);
+        let past = (whole.0 - below.0, whole.1 - below.1, whole.2 - below.2);
+        Below { n: below, rise: sums((s_first, per_point), below), fall: sums((1.0 - s_first, -per_point), past) }
     }
 }
 

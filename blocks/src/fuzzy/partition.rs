@@ -40,7 +40,10 @@ impl Partition {
     pub(super) fn locate(&self, x: f64) -> (usize, f64, f64) {
         let p = &self.peaks;
         let last = p.len() - 2;
-        let mut k = (((x - p[0]) * self.per_step).max(0.0) as usize).min(last);
+        // The guess rounded (`as usize`, which saturates, costs several
+        // instructions more): the loops below correct it by one if need be.
+        let guess = nearest_whole((x - p[0]) * self.per_step - 0.5);
+        let mut k = guess.clamp(0, last as i32) as usize;
         while k > 0 && x < p[k] {
             k -= 1;
         }
@@ -52,4 +55,15 @@ impl Partition {
         let width = p[k + 1] - p[k];
         (k, (p[k + 1] - x) / width, (x - p[k]) / width)
     }
+}
+
+/// The whole number nearest to `x` (|x| < 2³¹; ties to even), without a
+/// conversion instruction's saturating checks or a libm call (`f64::round`
+/// and `ceil` are calls on baseline x86-64, without SSE4.1): adding
+/// 1.5·2⁵² rounds, as there the doubles are one apart, and leaves the whole
+/// number in the sum's low bits, two's complement.
+#[inline(always)]
+pub(super) fn nearest_whole(x: f64) -> i32 {
+    const ROUND: f64 = 6_755_399_441_055_744.0;
+    (x + ROUND).to_bits() as u32 as i32
 }
