@@ -2,7 +2,7 @@
 //! outputs recomputed at each stage, discrete outputs held.
 
 use super::io_for;
-use super::visit::{ComputedAt, Inline, Integrand, Visit};
+use super::visit::{ComputedAt, Integrand, Visit, sweep};
 use crate::compile::Model;
 use ctlgraph_solver::OdeSystem;
 
@@ -40,22 +40,22 @@ impl Minor<'_> {
     /// integrators' already copied).
     #[inline(always)]
     fn run(&mut self, visits: &[Visit], t: f64, x: &[f64]) {
-        let m = &mut *self.model;
+        let (m, computed_at) = (&mut *self.model, &mut *self.computed_at);
         let left = t >= self.t_end;
-        let mut rest = visits;
-        while let [v, after @ ..] = rest {
-            if v.kernel.is_some() {
-                rest = Inline::run_from(rest, self.signals, |_| true);
-                continue;
-            }
-            rest = after;
-            if !self.computed_at.must_run(v, t, left) {
-                continue;
-            }
-            let meta = &m.slots[v.block];
-            let mut io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
-            m.blocks[v.block].output(&mut io);
-        }
+        sweep(
+            visits,
+            self.signals,
+            |_| true,
+            #[inline(always)]
+            |v, signals| {
+                if computed_at.must_run(v, t, left) {
+                    let meta = &m.slots[v.block];
+                    let mut io =
+                        io_for(meta, t, left, x, signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
+                    m.blocks[v.block].output(&mut io);
+                }
+            },
+        );
     }
 
     /// Block `i`'s zero-crossing functions at (t, x), outputs computed.

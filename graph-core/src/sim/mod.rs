@@ -29,7 +29,7 @@ pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
 use minor::{Minor, stale_at_start};
 use std::ops::Range;
-use visit::{ComputedAt, Inline, Integrand, Visit};
+use visit::{ComputedAt, Integrand, Visit};
 
 /// Counters for the run report.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -284,21 +284,21 @@ impl Simulator {
         for integrator in &self.integrands {
             integrator.output(&self.x, &mut self.signals);
         }
-        let (clocks, first) = (&self.clocks, self.first);
-        let mut rest = &order[..];
-        while let [v, after @ ..] = rest {
-            if v.kernel.is_some() {
-                rest = Inline::run_from(rest, &mut self.signals, |v| due(v.rate, clocks, first));
-                continue;
-            }
-            rest = after;
-            if !due(v.rate, clocks, first) || !self.computed_at.must_run(v, self.t, false) {
-                continue;
-            }
-            let slot = &m.slots[v.block];
-            let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
-            m.blocks[v.block].output(&mut io);
-        }
+        let (clocks, first, t, x) = (&self.clocks, self.first, self.t, &self.x);
+        let computed_at = &mut self.computed_at;
+        visit::sweep(
+            order,
+            &mut self.signals,
+            |v| due(v.rate, clocks, first),
+            #[inline(always)]
+            |v, signals| {
+                if computed_at.must_run(v, t, false) {
+                    let slot = &m.slots[v.block];
+                    let mut io = io_for(slot, t, false, x, signals, &m.in_ports, &m.out_ports);
+                    m.blocks[v.block].output(&mut io);
+                }
+            },
+        );
     }
 
     /// Runs `update` of the blocks that have one (see [`crate::block::Block::updates`])

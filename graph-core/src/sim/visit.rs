@@ -31,6 +31,29 @@ impl Visit {
     }
 }
 
+/// Runs `visits` in order: kernels in place on `signals` (a run of them in
+/// one loop, [`Inline::run_from`]), and every other visit `due` says
+/// through `call`. The major step's sweep and the solver's stages share it.
+#[inline(always)]
+pub(super) fn sweep(
+    visits: &[Visit],
+    signals: &mut [f64],
+    due: impl Fn(&Visit) -> bool,
+    mut call: impl FnMut(&Visit, &mut [f64]),
+) {
+    let mut rest = visits;
+    while let [v, after @ ..] = rest {
+        if v.kernel.is_some() {
+            rest = Inline::run_from(rest, signals, &due);
+            continue;
+        }
+        rest = after;
+        if due(v) {
+            call(v, signals);
+        }
+    }
+}
+
 /// When each time-only block ([`crate::block::Block::time_only`]) last
 /// computed its outputs, which stand in the signal buffer until it runs
 /// again: the time's bits, and whether it was taken as a left limit (for
@@ -167,7 +190,7 @@ impl Inline {
     /// follows it, the run of kernels from it ([`Inline::run_all`], a call
     /// that pays off from two kernels on); returns the visits after.
     #[inline(always)]
-    pub(super) fn run_from<'v>(visits: &'v [Visit], signals: &mut [f64], due: impl Fn(&Visit) -> bool) -> &'v [Visit] {
+    fn run_from<'v>(visits: &'v [Visit], signals: &mut [f64], due: impl Fn(&Visit) -> bool) -> &'v [Visit] {
         match visits {
             [_, next, ..] if next.kernel.is_some() => &visits[Self::run_all(visits, signals, due)..],
             [v, after @ ..] => {
