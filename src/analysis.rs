@@ -19,6 +19,67 @@ pub fn linearize_file(path: &Path, sets: &[(String, String)], sel: &Selection) -
     linearize(model, &sel)
 }
 
+/// [`linearize_file`] for the analyses that need a transfer (a Bode plot,
+/// margins, the matrices B, C, D): refused when neither the command line
+/// nor the file names its signals, and when no path leads from the input
+/// to the output — figures of the whole model (no input: B = C = 0, gain
+/// margin ∞) would look like results and mean nothing.
+pub fn linearize_transfer(
+    path: &Path,
+    sets: &[(String, String)],
+    sel: &Selection,
+) -> Result<Linearization, AnalysisError> {
+    let model = ctlgraph_core::compile(&ctlgraph_core::load(path, sets)?, &crate::registry())?;
+    let sel = merged(sel, model.analysis.as_ref());
+    if sel.input.is_none() && sel.output.is_none() && sel.open.is_none() {
+        let on = model.on_loops();
+        let loops: Vec<&str> = (0..on.len()).filter(|&i| on[i]).map(|i| model.meta[i].name.as_str()).collect();
+        let hint = match loops.as_slice() {
+            [] => "the graph has no feedback loop: name a transfer with --input SIGNAL --output SIGNAL".to_string(),
+            some => format!(
+                "signals on the graph's loops, to open one with --open: {}{}",
+                some.iter().take(12).map(|s| format!("`{s}`")).collect::<Vec<_>>().join(", "),
+                if some.len() > 12 { ", …" } else { "" }
+            ),
+        };
+        let message = format!(
+            "{}: nothing to analyse: give --input and --output, or --open, or an `analysis:` section in the file",
+            path.display()
+        );
+        return Err(AnalysisError::Invalid(ctlgraph_core::Diagnostic::plain(message).with_hint(hint)));
+    }
+    let lin = linearize(model, &sel)?;
+    if no_path(&lin.system) {
+        let message = format!(
+            "{}: no path leads from `{}` to `{}`: the transfer is zero at this operating point",
+            path.display(),
+            lin.input,
+            lin.output
+        );
+        return Err(AnalysisError::Invalid(
+            ctlgraph_core::Diagnostic::plain(message).with_hint("check the signals' names and the wiring between them"),
+        ));
+    }
+    Ok(lin)
+}
+
+/// Whether a single-input, single-output system's transfer is identically
+/// zero: D and every Markov parameter C·Aᵏ·B (k < n) vanish.
+fn no_path(ss: &ctlgraph_solver::StateSpace) -> bool {
+    if ss.d.iter().any(|&d| d != 0.0) {
+        return false;
+    }
+    let n = ss.n;
+    let mut v: Vec<f64> = ss.b.iter().take(n).copied().collect();
+    for _ in 0..n {
+        if (0..n).map(|i| ss.c[i] * v[i]).sum::<f64>() != 0.0 {
+            return false;
+        }
+        v = (0..n).map(|i| (0..n).map(|j| ss.a[i * n + j] * v[j]).sum()).collect();
+    }
+    true
+}
+
 /// The selection given, completed from the file's `analysis:` section
 /// (a command line that names any signal replaces the whole section).
 pub fn merged(given: &Selection, file: Option<&Selection>) -> Selection {

@@ -11,6 +11,9 @@ use ctlgraph_core::linearize::{AnalysisError, Linearization, Selection};
 use ctlgraph_solver::freq;
 use std::path::{Path, PathBuf};
 
+/// [`analysis::linearize_file`] or [`analysis::linearize_transfer`].
+type Linearizer = fn(&Path, &[(String, String)], &Selection) -> Result<Linearization, AnalysisError>;
+
 /// What to analyse (the graph's `analysis:` section when no signal is named).
 #[derive(clap::Args)]
 pub(crate) struct SelectArgs {
@@ -34,7 +37,17 @@ pub(crate) struct SelectArgs {
 }
 
 impl SelectArgs {
+    /// The linear model of the whole graph, or of the transfer selected.
     fn linearize(&self) -> Result<Linearization, Failure> {
+        self.linearize_with(analysis::linearize_file)
+    }
+
+    /// The transfer selected (refused when nothing is, or nothing connects it).
+    fn linearize_transfer(&self) -> Result<Linearization, Failure> {
+        self.linearize_with(analysis::linearize_transfer)
+    }
+
+    fn linearize_with(&self, linearize: Linearizer) -> Result<Linearization, Failure> {
         let sets = self.sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
         let sel = Selection {
             input: self.input.clone(),
@@ -43,7 +56,7 @@ impl SelectArgs {
             at: self.at,
             pos: None,
         };
-        analysis::linearize_file(&self.graph, &sets, &sel).map_err(|e| match e {
+        linearize(&self.graph, &sets, &sel).map_err(|e| match e {
             AnalysisError::Invalid(d) => Failure::Invalid(d),
             AnalysisError::Run(e) => Failure::Run(format!("reaching the operating point: {e}")),
         })
@@ -90,7 +103,7 @@ fn matrix(name: &str, m: &[f64], rows: usize, cols: usize) {
 }
 
 pub(crate) fn linearize(args: SelectArgs, out: Option<&Path>) -> Result<(), Failure> {
-    let lin = args.linearize()?;
+    let lin = args.linearize_transfer()?;
     let ss = &lin.system;
     println!("{}", describe(&args.graph, &lin));
     println!("states: {}", if lin.states.is_empty() { "(none)".into() } else { lin.states.join(", ") });
@@ -139,7 +152,7 @@ pub(crate) fn bode(args: SelectArgs, grid: GridArgs) -> Result<(), Failure> {
     if !(2..=1_000_000).contains(&grid.points) {
         return Err(Diagnostic::plain(format!("--points {}: from 2 to 1000000", grid.points)).into());
     }
-    let lin = args.linearize()?;
+    let lin = args.linearize_transfer()?;
     let auto = freq::auto_range(&lin.system, lin.sample_time);
     let range = (grid.from.unwrap_or(auto.0), grid.to.unwrap_or(auto.1));
     if !(range.0 > 0.0 && range.1 > range.0 && range.1.is_finite()) {

@@ -366,3 +366,24 @@ fn discrete_linear_models_step_like_their_blocks() {
         }
     }
 }
+
+#[test]
+fn an_analysis_with_nothing_selected_or_no_path_is_refused_not_faked() {
+    // Without --input/--output/--open and without an `analysis:` section,
+    // the whole model's "transfer" has B = C = 0: a gain margin of inf and a
+    // peak sensitivity of 1 that mean nothing.
+    for command in ["bode", "linearize"] {
+        let out = ctlgraph(&[command, "graphs/tutorial/pid_loop.yaml"]);
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{command}: {stderr}");
+        assert!(stderr.contains("nothing to analyse: give --input and --output, or --open"), "{stderr}");
+        assert!(stderr.contains("--open: `plant`, `err`, `ctrl`"), "{stderr}");
+        assert!(out.stdout.is_empty(), "{command} printed figures");
+    }
+    // Poles need no transfer: the whole model's stay.
+    assert_eq!(ctlgraph(&["poles", "graphs/tutorial/pid_loop.yaml"]).status.code(), Some(0));
+    // The reference feeds nothing back from the plant: no path from y to r.
+    let out = ctlgraph(&["bode", "graphs/tutorial/pid_loop.yaml", "--input", "plant", "--output", "r"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("no path leads from `plant` to `r`"), "{}", text(&out.stderr));
+}
