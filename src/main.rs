@@ -345,6 +345,9 @@ fn check(graph: &Path, sets: &[String]) -> Result<(), Failure> {
             println!("  warning: check `{}`: {problem}: it will be skipped", c.name);
         }
     }
+    for w in &model.warnings {
+        println!("  warning: {w}");
+    }
     println!("execution order:");
     let width = model.meta.iter().map(|m| m.name.len()).max().unwrap_or(0);
     for (i, m) in model.meta.iter().enumerate() {

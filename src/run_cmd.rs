@@ -279,7 +279,7 @@ fn summary(
         graph.display(),
         plural(stats.major_steps, "step"),
     );
-    for w in sim.warnings() {
+    for w in sim.model().warnings.iter().chain(sim.warnings()) {
         report.push_str(&format!("  warning: {w}\n"));
     }
     for r in results {

@@ -249,7 +249,7 @@ fn event_stiff_and_delay_settings_are_checked() {
     let negative = delay("delay: -1");
     check(&negative, 3, col(&negative, 3, "-1"), "block `d` (transport_delay): `delay`", None);
     let order = delay("delay: 1, order: 2");
-    check(&order, 3, col(&order, 3, "2 }"), "must be 1 (linear) or 3 (cubic)", None);
+    check(&order, 3, col(&order, 3, "2 }"), "must be 1 (linear), 3 (cubic) or 5 (quintic)", None);
     let relay =
         "blocks:\n  u: { type: sine }\n  r: { type: relay, on_threshold: -1, off_threshold: 1 }\nwires: [u -> r]\n";
     check(relay, 3, col(relay, 3, "-1"), "`on_threshold` (-1) must be >= `off_threshold` (1)", None);

@@ -180,9 +180,11 @@ fn events_modes_and_delays_allocate_nothing_once_warm() {
         assert!(stop_events > 0, "the relay cycles: {stop_events} events");
         assert_eq!(count_allocations(model, warm_up, 10_000), 0, "{solver}");
     }
+    // trbdf2's steps shrink at the relay's switches and their arrivals at the
+    // delay's output (breakpoints): the histories reach their working size later.
     let stiff = EVENTS.replace("SOLVER", "{ method: trbdf2, max_step: 1.0e-3 }");
     let model = ctlgraph::compile_str(&stiff, "events.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
-    assert_eq!(count_allocations(model, 2_000, 5_000), 0, "trbdf2");
+    assert_eq!(count_allocations(model, 6_000, 5_000), 0, "trbdf2");
 }
 
 /// Events located in the first two seconds.

@@ -223,6 +223,13 @@ impl<'a> Io<'a> {
         self.major
     }
 
+    /// Whether `t` is seen as a left limit: the solver's last stage at the
+    /// end of a step, or a [`Block::left_limit`] call.
+    #[inline]
+    pub fn is_left_limit(&self) -> bool {
+        self.left_limit
+    }
+
     /// Whether a block with modes may switch mode now: at major steps, and
     /// at every evaluation when zero-crossing detection is off (the block
     /// then acts as a plain function). False in the solver's minor steps
@@ -311,6 +318,24 @@ impl<'a> Io<'a> {
     pub fn reached(&self, t_event: f64) -> bool {
         self.t > t_event || (self.t == t_event && !self.left_limit)
     }
+}
+
+/// A major step at which signals may be discontinuous: a sample hit, a
+/// block event, a located zero crossing, a clamped state, a host's input.
+/// Blocks that keep their input's past ([`Block::keeps_history`]) receive
+/// the signals' left limit there ([`Block::left_limit`]), so that what
+/// they interpolate never straddles a jump or a kink, and may schedule the
+/// discontinuity's arrival at their output as an event.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Breakpoint {
+    /// How many delays the discontinuity has passed through: 0 where it
+    /// arose, one more at each delay's output (the lowest of the causes
+    /// when several coincide).
+    pub generation: u32,
+    /// Only sample hits fall here: discrete outputs may have jumped, but
+    /// the kinks they leave in continuous signals are many (one per hit)
+    /// and left to the solver.
+    pub sample_hit_only: bool,
 }
 
 /// A memoryless computation that a block's `output` performs, simple
@@ -537,6 +562,33 @@ pub trait Block: std::any::Any + Send + dyn_clone::DynClone {
     /// The value a host program sets, for the compiler's top-level inports
     /// only; library blocks keep the default.
     fn external_input(&mut self) -> Option<&mut [f64]> {
+        None
+    }
+
+    /// Whether the block keeps its first input's past to interpolate in
+    /// (transport delays). The simulator then evaluates that input in the
+    /// solver's minor steps and calls [`Block::left_limit`] at breakpoints.
+    fn keeps_history(&self) -> bool {
+        false
+    }
+
+    /// At a [`Breakpoint`], before the major step's outputs: `io` shows the
+    /// signals' left limit there (continuous signals at the step's end,
+    /// modes as in the step, discrete outputs and inputs not yet changed).
+    /// The block's `update` at the same time then sees the right limit.
+    fn left_limit(&mut self, _io: &Io, _at: Breakpoint) {}
+
+    /// The [`Breakpoint::generation`] of the event [`Block::next_event`]
+    /// reports for `t`: 0 for a source's own jump, more for a
+    /// discontinuity a delay passes on.
+    fn event_generation(&self, _t: f64) -> u32 {
+        0
+    }
+
+    /// The fixed time by which the output lags the input (a transport
+    /// delay's dead time), for the solver's default `max_step` and the
+    /// warnings about steps longer than a delay in a loop.
+    fn dead_time(&self) -> Option<f64> {
         None
     }
 }

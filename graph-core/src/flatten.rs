@@ -12,7 +12,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 mod includes;
+mod output;
 use includes::{IncludeError, Includes};
+pub use output::{MAX_REFINE, OutputTimes};
 
 /// Block types the loader and compiler treat specially.
 pub const SUBSYSTEM: &str = "subsystem";
@@ -33,6 +35,8 @@ pub struct SimConfig {
     /// Whether `max_step` was left to its default, which then follows the
     /// run's effective stop time (`--stop-time`), not the file's.
     pub default_max_step: bool,
+    /// `output:` — the times recorded.
+    pub output: OutputTimes,
 }
 
 /// `solver: { zero_crossing: … }`: whether the simulator locates the zero
@@ -203,7 +207,7 @@ fn eval_parameters(
     Ok(scope)
 }
 
-const SIM_KEYS: [&str; 3] = ["stop", "solver", "seed"];
+const SIM_KEYS: [&str; 4] = ["stop", "solver", "seed", "output"];
 const SOLVER_KEYS: [&str; 8] =
     ["method", "step", "rtol", "atol", "max_step", "initial_step", "zero_crossing", "exact_lti"];
 const METHODS: [&str; 5] = ["dopri5", "trbdf2", "rk4", "heun", "euler"];
@@ -360,7 +364,8 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
     }
     let default_max_step = method.max_step().is_nan();
     let method = if default_max_step { method.with_max_step(method.default_max_step(stop)) } else { method };
-    Ok(SimConfig { stop, method, seed, zero_crossing, exact_lti, default_max_step })
+    let output = output::output_times(yaml::lookup(entries, "output"), num, stop)?;
+    Ok(SimConfig { stop, method, seed, zero_crossing, exact_lti, default_max_step, output })
 }
 
 fn check_keys(entries: &[(Key, Yaml)], known: &[&str], section: &str) -> Result<(), Diagnostic> {

@@ -24,10 +24,10 @@ pub mod trace;
 pub mod yaml;
 
 pub use block::Crossing;
-pub use block::{Block, Interface, Io, Kernel, SampleTime, Width};
+pub use block::{Block, Breakpoint, Interface, Io, Kernel, SampleTime, Width};
 pub use compile::{Model, compile};
 pub use diag::{Diagnostic, Pos};
-pub use flatten::{FlatGraph, SimConfig, ZeroCrossing, load, load_str};
+pub use flatten::{FlatGraph, OutputTimes, SimConfig, ZeroCrossing, load, load_str};
 pub use params::Params;
 pub use registry::{BlockType, Built, ParamDoc, PortDoc, Registry};
 pub use sim::{RunStats, SimError, Simulator, Snapshot};

@@ -2,7 +2,7 @@
 //! grid, clocks counted in ticks, block events, the exact-ZOH hold) around
 //! the generated sweeps, so both compute the same numbers to the bit.
 
-use crate::block::{Kernel, Port};
+use crate::block::{Breakpoint, Kernel, Port};
 use crate::compile::{BlockMeta, Model};
 use crate::sim::{self, Blame, OnGrid, RunStats, SimError, Timing};
 use ctlgraph_solver::{Integrator, OdeSystem, Zoh, ZohSingleInput};
@@ -13,6 +13,8 @@ use ctlgraph_solver::{Integrator, OdeSystem, Zoh, ZohSingleInput};
 pub trait GeneratedStep: Sized {
     /// The structure the code was generated for ([`super::fingerprint`]).
     const FINGERPRINT: u64;
+    /// Whether a block keeps its input's past ([`crate::Block::keeps_history`]).
+    const KEEPS_HISTORY: bool;
     /// Takes the blocks, with their parameters, from a model of that structure.
     fn from_model(model: &Model) -> Result<Self, String>;
     fn signals(&self) -> &[f64];
@@ -31,7 +33,12 @@ pub trait GeneratedStep: Sized {
     /// A solver stage: continuous outputs at (t, x), then derivatives.
     fn derivatives(&mut self, t: f64, left: bool, x: &[f64], dx: &mut [f64]);
     fn clamp_states(&mut self, x: &mut [f64]) -> bool;
-    fn next_event(&self, t: f64) -> f64;
+    /// The earliest block event after `t` and its generation, as
+    /// [`crate::sim::earlier`] folds the blocks' events.
+    fn next_event(&self, t: f64) -> (f64, u32);
+    /// At a breakpoint: the minor step's outputs at (t, x) as a left
+    /// limit, handed to the blocks keeping history ([`crate::Block::left_limit`]).
+    fn left_limits(&mut self, t: f64, x: &[f64], at: Breakpoint);
     fn diagnose(&self, block: usize) -> Option<String>;
 }
 
@@ -101,6 +108,10 @@ pub struct Compiled<G: GeneratedStep> {
     all_finite: bool,
     at_event: bool,
     next_event: f64,
+    next_event_generation: u32,
+    /// Left limits were handed out at the last major step: the updates may
+    /// schedule events (see the simulator's field of that name).
+    events_may_change: bool,
     n_integrated: usize,
     major_steps: u64,
     /// For naming a block in an error.
@@ -151,6 +162,8 @@ impl<G: GeneratedStep> Compiled<G> {
             all_finite: true,
             at_event: true,
             next_event: f64::INFINITY,
+            next_event_generation: 0,
+            events_may_change: false,
             n_integrated: model.between.n_integrated,
             major_steps: 0,
             meta: model.meta.clone(),
@@ -178,7 +191,8 @@ impl<G: GeneratedStep> Compiled<G> {
                 self.mark_hits();
             }
         }
-        self.next_event = self.step.next_event(self.t);
+        (self.next_event, self.next_event_generation) = self.step.next_event(self.t);
+        self.events_may_change = false;
         self.integ.reset();
     }
 
@@ -248,8 +262,11 @@ impl<G: GeneratedStep> Compiled<G> {
     /// Steps (3) and (4): updates, then integration to the next major step.
     pub fn advance(&mut self) -> Result<(), SimError> {
         self.step.updates(self.t, &self.x, &self.hit);
+        if std::mem::take(&mut self.events_may_change) {
+            (self.next_event, self.next_event_generation) = self.step.next_event(self.t);
+        }
         self.step.hold_inputs();
-        if self.on_grid.is_some() && self.n_integrated == 0 {
+        if self.on_grid.is_some() && self.n_integrated == 0 && !G::KEEPS_HISTORY {
             let next = self.timing.grid.next;
             if next <= self.stop && self.next_event > next + self.timing.tol {
                 return self.advance_to_grid_point(next);
@@ -280,11 +297,18 @@ impl<G: GeneratedStep> Compiled<G> {
         };
         let block_event = self.t >= self.next_event - tol;
         self.at_event = block_event;
+        let event_generation = self.next_event_generation;
         if block_event {
-            self.next_event = self.step.next_event(self.t);
+            (self.next_event, self.next_event_generation) = self.step.next_event(self.t);
         }
         if hit || block_event || clamped {
             self.integ.invalidate();
+        }
+        if G::KEEPS_HISTORY
+            && let Some(at) = sim::breakpoint(hit, block_event, clamped, event_generation)
+        {
+            self.step.left_limits(self.t, &self.x[..self.n_integrated], at);
+            self.events_may_change = true;
         }
         self.check_states()?;
         if self.t <= t0 {
@@ -296,7 +320,8 @@ impl<G: GeneratedStep> Compiled<G> {
 
     /// [`Self::advance`]'s steps after the updates, where they are known to
     /// end at the grid's next point `next`: nothing is integrated (held LTI
-    /// blocks are stepped exactly), the clocks are on the grid, and neither
+    /// blocks are stepped exactly), no block keeps history (so no left
+    /// limits are due at hits), the clocks are on the grid, and neither
     /// the stop time nor a block event comes first. The general path then
     /// takes `next` as the major step's time (the integrator's candidate
     /// t0 + h differs from it by rounding only), marks the grid and the

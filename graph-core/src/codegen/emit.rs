@@ -13,7 +13,7 @@ pub(super) fn body(model: &Model) -> String {
     let g = Gen::new(model);
     let mut out = String::new();
     out.push_str(
-        "\n#[allow(unused_imports)]\nuse ::ctlgraph_core::block::{Io, Kernel, Port};\n\
+        "\n#[allow(unused_imports)]\nuse ::ctlgraph_core::block::{Breakpoint, Io, Kernel, Port};\n\
          #[allow(unused_imports)]\nuse ::ctlgraph_core::{Block, Model};\n\
          #[allow(unused_imports)]\nuse ::ctlgraph_core::codegen::{self as cg, Zoh};\n\n",
     );
@@ -109,7 +109,9 @@ impl<'m> Gen<'m> {
     }
 
     fn implementation(&self, out: &mut String) {
-        out.push_str("impl cg::GeneratedStep for Step {\n    const FINGERPRINT: u64 = FINGERPRINT;\n\n");
+        out.push_str("impl cg::GeneratedStep for Step {\n    const FINGERPRINT: u64 = FINGERPRINT;\n");
+        let keeps_history = self.model.blocks.iter().any(|b| b.keeps_history());
+        let _ = writeln!(out, "    const KEEPS_HISTORY: bool = {keeps_history};\n");
         self.constructor(out);
         out.push_str(
             "    fn signals(&self) -> &[f64] {\n        &*self.s\n    }\n\n\
@@ -120,6 +122,7 @@ impl<'m> Gen<'m> {
         self.updates(out);
         self.held(out);
         self.derivatives(out);
+        self.left_limits(out);
         self.clamp_states(out);
         self.next_event(out);
         self.diagnose(out);
@@ -308,9 +311,7 @@ impl<'m> Gen<'m> {
             let _ = writeln!(out, "        let dx: &mut [f64; {n}] = cg::fixed_mut(dx);");
         }
         bind_signals(out);
-        for &i in &m.between.minor {
-            let _ = writeln!(out, "        {}", self.output_call(&self.visits[i], "left", true));
-        }
+        self.minor_outputs(out, "left");
         for &i in &m.between.integrated {
             let states = &self.visits[i].states;
             let _ = writeln!(
@@ -319,6 +320,39 @@ impl<'m> Gen<'m> {
                 io(i, "left", states, true),
                 range(states)
             );
+        }
+        out.push_str("    }\n\n");
+    }
+
+    /// The minor step's output sweep, `left` the left-limit flag's expression.
+    fn minor_outputs(&self, out: &mut String, left: &str) {
+        for &i in &self.model.between.minor {
+            let _ = writeln!(out, "        {}", self.output_call(&self.visits[i], left, true));
+        }
+    }
+
+    /// At a breakpoint: the minor step's outputs as a left limit, handed
+    /// to the blocks that keep history (the simulator's `left_limits`).
+    fn left_limits(&self, out: &mut String) {
+        let m = self.model;
+        out.push_str(
+            "    #[allow(unused_variables)]\n    fn left_limits(&mut self, t: f64, x: &[f64], at: Breakpoint) {\n",
+        );
+        let keeping: Vec<usize> = (0..m.blocks.len()).filter(|&i| m.blocks[i].keeps_history()).collect();
+        if !keeping.is_empty() {
+            let n = m.between.n_integrated;
+            if n > 0 {
+                fix_states(out, false, n);
+            }
+            bind_signals(out);
+            self.minor_outputs(out, "true");
+            for i in keeping {
+                let _ = writeln!(
+                    out,
+                    "        self.b{i}.left_limit(&{}, at);",
+                    io(i, "true", &self.visits[i].states, true)
+                );
+            }
         }
         out.push_str("    }\n\n");
     }
@@ -346,9 +380,15 @@ impl<'m> Gen<'m> {
     /// The earliest block event after `t`, blocks in order as the simulator
     /// folds them.
     fn next_event(&self, out: &mut String) {
-        out.push_str("    #[allow(unused_variables)]\n    fn next_event(&self, t: f64) -> f64 {\n        let mut next = f64::INFINITY;\n");
+        out.push_str(
+            "    #[allow(unused_variables)]\n    fn next_event(&self, t: f64) -> (f64, u32) {\n        let mut next = (f64::INFINITY, 0);\n",
+        );
         for v in &self.visits {
-            let _ = writeln!(out, "        next = f64::min(next, self.b{}.next_event(t));", v.index);
+            let i = v.index;
+            let _ = writeln!(
+                out,
+                "        next = cg::earlier(next, self.b{i}.next_event(t), || self.b{i}.event_generation(t));"
+            );
         }
         out.push_str("        next\n    }\n\n");
     }

@@ -19,6 +19,7 @@ mod driver;
 mod emit;
 
 use crate::compile::Model;
+pub use crate::sim::earlier;
 pub use crate::sim::not_finite_bits;
 pub use ctlgraph_solver::{Zoh, ZohSingleInput};
 pub use driver::{
@@ -38,6 +39,13 @@ pub fn refusals(model: &Model) -> Vec<String> {
                 meta.name, meta.type_name
             ));
         }
+    }
+    if model.sim.output != crate::flatten::OutputTimes::Steps {
+        why.push(
+            "`simulation.output` records rows between steps from the dense output, which the generated step \
+             does not compute"
+                .to_string(),
+        );
     }
     for (name, _) in &model.external_inputs {
         why.push(format!("top-level inport `{name}` is set by a host through `Simulator::set_input`"));

@@ -67,13 +67,17 @@ pub(super) fn plan(model: &mut Model, piecewise: &[bool]) {
     let watching = model.sim.zero_crossing != ZeroCrossing::Off;
     let is_watched: Vec<bool> = model.blocks.iter().map(|b| watching && b.needs_major_step()).collect();
     let watched = |i: usize| is_watched[i];
+    // Blocks keeping their input's past read it at breakpoints' left limits,
+    // which a minor-step evaluation computes.
+    let keeps_history: Vec<bool> = model.blocks.iter().map(|b| b.keeps_history()).collect();
     // Minor steps evaluate the integrated and watched blocks and, backwards,
     // every continuous signal they read that may change within a step. A
     // held block reached that way is read there after all: integrate it.
     let minor = loop {
         let mut minor = vec![false; n];
-        let mut stack: Vec<usize> =
-            (0..n).filter(|&i| continuous(i) && !held[i] && (has_states(i) || watched(i))).collect();
+        let mut stack: Vec<usize> = (0..n)
+            .filter(|&i| continuous(i) && !held[i] && (has_states(i) || watched(i) || keeps_history[i]))
+            .collect();
         for &i in &stack {
             minor[i] = true;
         }

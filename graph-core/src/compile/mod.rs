@@ -3,6 +3,7 @@
 //! widths and rates, sort by direct-feedthrough edges and lay out one flat
 //! signal buffer with every input resolved to an index.
 
+mod advice;
 mod between;
 mod external;
 mod schedule;
@@ -118,6 +119,11 @@ pub struct Model {
     /// The graph's own outputs, its top-level `outport` blocks: name and
     /// the signal each carries.
     pub external_outputs: Vec<(String, Port)>,
+    /// The smallest dead time on a feedback loop and its block: the
+    /// adaptive methods' default `max_step` stays below it.
+    pub loop_dead_time: Option<(f64, usize)>,
+    /// What `check` and `run` warn about (module `advice`).
+    pub warnings: Vec<String>,
 }
 
 struct Node<'g> {
@@ -276,8 +282,12 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         subsystem_ports,
         external_inputs,
         external_outputs,
+        loop_dead_time: None,
+        warnings: Vec::new(),
     };
     between::plan(&mut model, &piecewise);
+    model.loop_dead_time = advice::loop_dead_time(&model);
+    model.warnings = advice::warnings(&model);
     if let Some(sel) = &model.analysis {
         for name in [&sel.input, &sel.output, &sel.open].into_iter().flatten() {
             if let Err(d) = model.signal_offset(name) {

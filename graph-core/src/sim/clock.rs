@@ -3,6 +3,7 @@
 //! steps), shared by the simulator and a generated step
 //! ([`crate::codegen::Compiled`]).
 
+use crate::block::Breakpoint;
 use crate::compile::Model;
 use ctlgraph_solver::Method;
 
@@ -87,7 +88,12 @@ pub(crate) struct Timing {
 impl Timing {
     pub(crate) fn new(model: &Model, stop: f64) -> Self {
         let method = match model.sim.method {
-            m if model.sim.default_max_step => m.with_max_step(m.default_max_step(stop)),
+            // With a delay on a loop, a step longer than it would take the
+            // delay's output from past the newest sample.
+            m if model.sim.default_max_step => {
+                let delay = model.loop_dead_time.map_or(f64::INFINITY, |(d, _)| d);
+                m.with_max_step(m.default_max_step(stop).min(delay))
+            }
             m => m,
         };
         let grid_step = if method.is_adaptive() { 0.0 } else { method.max_step() };
@@ -201,4 +207,30 @@ impl OnGrid {
         }
         any
     }
+}
+
+/// Folds one block's next event `e` into the earliest so far, `best`
+/// (time and generation): the earlier wins, and of events at one time the
+/// lowest generation (a source's own jump before a delay's arrival).
+/// `generation` is asked only when it counts.
+#[inline]
+pub fn earlier(best: (f64, u32), e: f64, generation: impl FnOnce() -> u32) -> (f64, u32) {
+    if e < best.0 {
+        (e, generation())
+    } else if e == best.0 && e < f64::INFINITY {
+        (e, best.1.min(generation()))
+    } else {
+        best
+    }
+}
+
+/// The breakpoint at a major step, if it is one: reached by a sample hit,
+/// a block event (of generation `event_generation`), or a state the step
+/// changed (`located`: a zero crossing that ended it, a clamp). A sample
+/// hit is the weakest cause: any other sets the generation.
+pub(crate) fn breakpoint(hit: bool, block_event: bool, located: bool, event_generation: u32) -> Option<Breakpoint> {
+    (hit || block_event || located).then_some(Breakpoint {
+        generation: if located || !block_event { 0 } else { event_generation },
+        sample_hit_only: !(located || block_event),
+    })
 }

@@ -11,7 +11,7 @@
 //! An adaptive method's steps are cut at each landing time, which changes
 //! them (within the tolerances).
 
-use super::{Clock, Held, SimError, Simulator, Watch};
+use super::{Clock, Dense, Held, SimError, Simulator, Watch};
 use crate::block::Block;
 use crate::diag::Diagnostic;
 use ctlgraph_solver::Integrator;
@@ -35,12 +35,15 @@ pub struct Snapshot {
     stop: f64,
     first: bool,
     next_event: f64,
+    next_event_generation: u32,
+    events_may_change: bool,
     major_steps: u64,
     stalled: u32,
     watch: Watch,
     held: Vec<Held>,
     at_event: bool,
     inputs_changed: bool,
+    dense: Option<Dense>,
 }
 
 impl Snapshot {
@@ -77,20 +80,22 @@ impl Simulator {
                 },
             ));
         };
-        let Some(held) = self.model.blocks[block].external_input() else {
+        let Some(width) = self.model.blocks[block].external_input().map(|held| held.len()) else {
             return Err(Diagnostic::plain(format!("input `{name}` holds no value (internal error)")));
         };
-        if held.len() != value.len() {
-            return Err(Diagnostic::plain(format!(
-                "input `{name}` has {} element(s), given {}",
-                held.len(),
-                value.len()
-            )));
+        if width != value.len() {
+            return Err(Diagnostic::plain(format!("input `{name}` has {width} element(s), given {}", value.len())));
         }
         if let Some(bad) = value.iter().find(|v| !v.is_finite()) {
             return Err(Diagnostic::plain(format!("input `{name}`: {bad} is not a finite number")));
         }
-        held.copy_from_slice(value);
+        if !self.first && !self.inputs_changed {
+            // The outputs at this time, with the input before, are its left limit.
+            self.hand_left_limits(crate::block::Breakpoint { generation: 0, sample_hit_only: false });
+        }
+        if let Some(held) = self.model.blocks[block].external_input() {
+            held.copy_from_slice(value);
+        }
         self.inputs_changed = true;
         Ok(())
     }
@@ -174,12 +179,15 @@ impl Simulator {
             stop: self.stop,
             first: self.first,
             next_event: self.next_event,
+            next_event_generation: self.next_event_generation,
+            events_may_change: self.events_may_change,
             major_steps: self.major_steps,
             stalled: self.stalled,
             watch: self.watch.clone(),
             held: self.held.clone(),
             at_event: self.at_event,
             inputs_changed: self.inputs_changed,
+            dense: self.dense.clone(),
         }
     }
 
@@ -195,9 +203,11 @@ impl Simulator {
             slot.frozen = frozen;
         }
         (self.signals, self.x, self.integ, self.clocks, self.grid) = (s.signals, s.x, s.integ, s.clocks, s.grid);
-        (self.t, self.stop, self.first, self.next_event) = (s.t, s.stop, s.first, s.next_event);
+        (self.t, self.stop, self.first) = (s.t, s.stop, s.first);
+        (self.next_event, self.next_event_generation) = (s.next_event, s.next_event_generation);
+        self.events_may_change = s.events_may_change;
         (self.major_steps, self.stalled, self.watch, self.held) = (s.major_steps, s.stalled, s.watch, s.held);
-        (self.at_event, self.inputs_changed) = (s.at_event, s.inputs_changed);
+        (self.at_event, self.inputs_changed, self.dense) = (s.at_event, s.inputs_changed, s.dense);
         self.outputs_current = false;
         self.computed_at.forget();
         Ok(())

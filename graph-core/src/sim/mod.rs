@@ -11,14 +11,17 @@
 //! allocates nothing.
 
 mod blame;
+mod breakpoints;
 mod clock;
 mod error;
 mod events;
 mod host;
 mod minor;
+mod output;
 pub(crate) mod visit;
 pub(crate) use blame::Blame;
-pub(crate) use clock::{Clock, OnGrid, Timing, mark_hits, next_major_time};
+pub use clock::earlier;
+pub(crate) use clock::{Clock, OnGrid, Timing, breakpoint, mark_hits, next_major_time};
 pub use error::SimError;
 pub use host::Snapshot;
 
@@ -28,6 +31,7 @@ use ctlgraph_solver::{Integrator, Method, Stats, Zoh};
 pub use events::MAX_CONSECUTIVE_EVENTS;
 use events::Watch;
 use minor::{Minor, stale_at_start};
+use output::Dense;
 use std::ops::Range;
 use visit::{ComputedAt, Integrand, Visit};
 
@@ -58,8 +62,13 @@ pub struct Simulator {
     /// Times closer than this are the same major step.
     tol: f64,
     first: bool,
-    /// Earliest block event after `t` (see [`Simulator::earliest_event`]).
+    /// Earliest block event after `t` (see [`Simulator::earliest_event`])
+    /// and its [`Breakpoint::generation`].
     next_event: f64,
+    next_event_generation: u32,
+    /// Blocks were handed a breakpoint's left limit: their updates may
+    /// schedule events (a delay's arrivals), so `next_event` is recomputed.
+    events_may_change: bool,
     major_steps: u64,
     /// Major steps in a row at which time did not advance.
     stalled: u32,
@@ -76,6 +85,8 @@ pub struct Simulator {
     held: Vec<Held>,
     /// Blocks with an `update` to run (execution order).
     updating: Vec<Visit>,
+    /// Blocks that keep their input's past ([`crate::Block::keeps_history`]).
+    history: Vec<usize>,
     /// The blocks in execution order; those a major step without an event
     /// runs (or runs at its clock's hits): neither constant nor event-only.
     every: Vec<Visit>,
@@ -96,6 +107,8 @@ pub struct Simulator {
     inputs_changed: bool,
     /// Where [`Simulator::advance_to`] must land (infinite otherwise).
     pause: f64,
+    /// Rows between major steps, when `simulation.output` asks for them.
+    dense: Option<Dense>,
     /// Tells this simulator's snapshots from others'.
     id: u64,
 }
@@ -147,6 +160,9 @@ impl Simulator {
         let visits = |blocks: &mut dyn Iterator<Item = usize>| Visit::list(&model, blocks.filter(|&i| !plain[i]));
         let minor = visits(&mut model.between.minor.iter().copied());
         let stale = stale_at_start(&model, &minor);
+        let varying =
+            visits(&mut (0..n).filter(|&i| model.slots[i].rate == Rate::Continuous && !model.between.event_only[i]));
+        let output_times = model.sim.output;
         let mut sim = Simulator {
             signals: vec![0.0; model.signal_len],
             x: vec![0.0; model.n_states],
@@ -159,6 +175,8 @@ impl Simulator {
             tol,
             first: true,
             next_event: f64::INFINITY,
+            next_event_generation: 0,
+            events_may_change: false,
             major_steps: 0,
             stalled: 0,
             watch,
@@ -167,6 +185,7 @@ impl Simulator {
             called,
             n_integrated: model.between.n_integrated,
             updating: Visit::list(&model, (0..n).filter(|&i| model.blocks[i].updates())),
+            history: (0..n).filter(|&i| model.blocks[i].keeps_history()).collect(),
             every: visits(&mut (0..n)),
             regular: visits(
                 &mut (0..n).filter(|&i| model.slots[i].rate != Rate::Constant && !model.between.event_only[i]),
@@ -178,9 +197,11 @@ impl Simulator {
             at_event: true,
             inputs_changed: false,
             pause: f64::INFINITY,
+            dense: None,
             id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             model,
         };
+        sim.dense = Dense::new(&sim, output_times, varying);
         sim.reset();
         sim
     }
@@ -201,9 +222,13 @@ impl Simulator {
             c.set_tick(0);
         }
         self.mark_hits();
-        self.next_event = self.earliest_event();
+        (self.next_event, self.next_event_generation) = self.earliest_event();
+        self.events_may_change = false;
         self.integ.reset();
         self.watch.reset(&mut self.model.slots);
+        if let Some(dense) = &mut self.dense {
+            dense.reset();
+        }
     }
 
     pub fn model(&self) -> &Model {
@@ -357,6 +382,9 @@ impl Simulator {
     /// to the first zero crossing before it.
     pub fn advance(&mut self) -> Result<(), SimError> {
         self.update_sweep();
+        if std::mem::take(&mut self.events_may_change) {
+            (self.next_event, self.next_event_generation) = self.earliest_event();
+        }
         for h in &mut self.held {
             for (u, &s) in h.u.iter_mut().zip(&self.signals[h.input.clone()]) {
                 *u = s;
@@ -364,6 +392,9 @@ impl Simulator {
         }
         let target = self.next_major_time();
         let t0 = self.t;
+        if let Some(dense) = &mut self.dense {
+            dense.start(t0, &self.x);
+        }
         let current = std::mem::take(&mut self.outputs_current) && !self.inputs_changed;
         let mut sys = Minor {
             model: &mut self.model,
@@ -386,6 +417,9 @@ impl Simulator {
                 Err(error) => return Err(self.blame().solver(&self.signals, t0, error)),
             }
         };
+        if let Some(dense) = &mut self.dense {
+            dense.solver_end(t_new, x);
+        }
         let event = self.watch.locate(&mut sys, &mut self.integ, t0, t_new, x);
         if let Some(t_event) = event {
             t_new = t_event;
@@ -407,6 +441,9 @@ impl Simulator {
         if self.grid_step > 0.0 {
             self.grid.pass(self.t, self.tol);
         }
+        if let Some(dense) = &mut self.dense {
+            dense.end(self.t);
+        }
         let mut clamped = false;
         for &i in &self.called {
             let meta = &self.model.slots[i];
@@ -415,11 +452,15 @@ impl Simulator {
         let hit = self.mark_hits();
         let block_event = self.t >= self.next_event - self.tol;
         self.at_event = block_event;
+        let event_generation = self.next_event_generation;
         if block_event {
-            self.next_event = self.earliest_event();
+            (self.next_event, self.next_event_generation) = self.earliest_event();
         }
         if hit || block_event || clamped {
             self.integ.invalidate();
+        }
+        if let Some(at) = breakpoint(hit, block_event, clamped || event.is_some(), event_generation) {
+            self.left_limits(at);
         }
         if !all_finite(&self.x) {
             return Err(self.blame().state(&self.signals, self.t, &self.x));
@@ -448,12 +489,6 @@ impl Simulator {
         if self.pause < next - self.tol { self.pause } else { next }
     }
 
-    /// The first block event strictly after the current time. Cached in
-    /// `next_event` and recomputed only when time reaches it.
-    fn earliest_event(&self) -> f64 {
-        self.model.blocks.iter().map(|b| b.next_event(self.t)).fold(f64::INFINITY, f64::min)
-    }
-
     /// Runs to the stop time, handing the signals to `sink` at every major
     /// step (including t = 0 and the stop time).
     pub fn run(&mut self, sink: &mut dyn FnMut(f64, &[f64])) -> Result<RunStats, SimError> {
@@ -471,7 +506,11 @@ impl Simulator {
     pub fn run_while(&mut self, sink: &mut dyn FnMut(f64, &[f64]) -> bool) -> Result<bool, SimError> {
         loop {
             self.outputs()?;
-            let go_on = sink(self.t, &self.signals);
+            // With `output: { every: DT }`, only a major step on the grid is a row.
+            let go_on = match self.dense.as_mut().map_or(Some(self.t), |dense| dense.major_row(self.t)) {
+                Some(t) => sink(t, &self.signals),
+                None => true,
+            };
             if self.finished() {
                 return Ok(true);
             }
@@ -479,6 +518,9 @@ impl Simulator {
                 return Ok(false);
             }
             self.advance()?;
+            if !self.dense_rows(sink) {
+                return Ok(false);
+            }
         }
     }
 }
