@@ -35,7 +35,13 @@ pub const TYPES: &[BlockType] = &[
               0.0234·h⁴·|u⁽⁴⁾| between samples h apart (9/16·h⁴/4!), 5 by 0.0049·h⁶·|u⁽⁶⁾| \
               (225/64·h⁶/6!), up to h⁴/4! and 0.024·h⁶ next to a breakpoint, where all samples lie on \
               one side — below what rk4 and dopri5 commit at steps that resolve u (5 matches dopri5's \
-              order best).\n\
+              order best). Where fewer samples lie between a breakpoint and the newest (a delay under \
+              `order` steps) the degree drops to what is there, down to linear. A jump no breakpoint \
+              marks (an `fcn` switching, a solver stepping over it) turns the stencil away: each sample \
+              is taken on the nearer side unless the divided difference it adds is over twice the other \
+              side's (ENO interpolation, Harten, Engquist, Osher & Chakravarthy 1987, with Shu's central \
+              bias), so the polynomial does not overshoot beside the jump when `order` steps of samples \
+              lie on each side of it.\n\
               Breakpoints (as in Hairer's RETARD and MATLAB's dde23): at every major step where the \
               signals may be discontinuous — t = 0, a sample hit, a source's jump, a located zero \
               crossing, a clamped state, a host's input — the input's left limit is stored beside its \
@@ -51,8 +57,8 @@ pub const TYPES: &[BlockType] = &[
               Simulink does. No direct feedthrough when delay > 0, so it breaks algebraic loops. The \
               buffer grows by doubling up to `max_buffer` samples, then the run stops with an error; \
               once grown it never reallocates.\n\
-              Bounds: |y| <= max(|initial|, sup|u|) with order 1 (higher orders may overshoot between \
-              samples).",
+              Bounds: |y| <= max(|initial|, sup|u|) with order 1; higher orders may pass it by their \
+              interpolation error (a crest between samples).",
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
