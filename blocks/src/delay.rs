@@ -139,7 +139,7 @@ pub struct TransportDelay {
 
 impl TransportDelay {
     fn new(delay: f64, variable: bool, initial: f64, history: History) -> Self {
-        TransportDelay { delay, variable, initial, history, arrivals: VecDeque::with_capacity(16), pending: None }
+        TransportDelay { delay, variable, initial, history, arrivals: VecDeque::new(), pending: None }
     }
 
     /// The delay in force: the parameter, or the clamped input.
@@ -177,6 +177,8 @@ impl Block for TransportDelay {
     fn initialize(&mut self, _x0: &mut [f64]) {
         self.history.clear();
         self.arrivals.clear();
+        // Here, not at build: a run's blocks are clones, which keep no spare capacity.
+        self.arrivals.reserve(16);
         self.pending = None;
         if !self.variable && self.delay > 0.0 {
             // The start is a breakpoint: the output jumps from `initial` at t = delay.

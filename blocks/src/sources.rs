@@ -97,7 +97,7 @@ pub const TYPES: &[BlockType] = &[
 
 /// A source whose output is a function of time only.
 #[derive(Clone)]
-struct TimeFn<F: Fn(&Io) -> f64 + Send + Clone> {
+struct TimeFn<F: Fn(&Io) -> f64 + Send + Sync + Clone> {
     f: F,
     events: Vec<f64>,
     /// The last evaluation: its time's bits, whether that time was seen as
@@ -112,12 +112,12 @@ struct TimeFn<F: Fn(&Io) -> f64 + Send + Clone> {
     last: (u64, bool, f64),
 }
 
-impl<F: Fn(&Io) -> f64 + Send + Clone> TimeFn<F> {
+impl<F: Fn(&Io) -> f64 + Send + Sync + Clone> TimeFn<F> {
     /// No time's bits are NaN's: the first call evaluates f.
     const NONE: (u64, bool, f64) = (u64::MAX, false, 0.0);
 }
 
-impl<F: Fn(&Io) -> f64 + Send + Clone + 'static> Block for TimeFn<F> {
+impl<F: Fn(&Io) -> f64 + Send + Sync + Clone + 'static> Block for TimeFn<F> {
     fn updates(&self) -> bool {
         false
     }
@@ -141,7 +141,7 @@ impl<F: Fn(&Io) -> f64 + Send + Clone + 'static> Block for TimeFn<F> {
 }
 
 /// A source y = f(t). `piecewise` declares that f changes only at `events`.
-fn scalar_source<F: Fn(&Io) -> f64 + Send + Clone + 'static>(
+fn scalar_source<F: Fn(&Io) -> f64 + Send + Sync + Clone + 'static>(
     p: &mut Params,
     events: Vec<f64>,
     piecewise: bool,

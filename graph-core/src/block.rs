@@ -378,14 +378,16 @@ impl Kernel {
 }
 
 /// A block of the library. See the module docs for when each method runs.
-/// Blocks are `Clone` (derive it): a snapshot of a run
-/// ([`crate::Simulator::state`]) copies every block's memory. They are
+/// Blocks are `Clone` (derive it): each run works on its own copies of the
+/// compiled model's blocks, kept in its [`crate::RunState`], and a snapshot
+/// of a run ([`crate::Simulator::state`]) is a clone of that. They are
+/// `Sync`, so one compiled model can be shared by runs on many threads. They are
 /// `Any` (every `'static` type is), so code that knows a graph's block
 /// types — a fused step, generated or written for a benchmark — can take
 /// a compiled model's blocks back as their concrete types
 /// (`Box<dyn Block>` → `Box<dyn Any>` → `downcast`) and call them without
 /// dynamic dispatch.
-pub trait Block: std::any::Any + Send + dyn_clone::DynClone {
+pub trait Block: std::any::Any + Send + Sync + dyn_clone::DynClone {
     /// Receives the resolved common width (only called for blocks with a
     /// [`Width::Common`] port), before any other call. Allocate here.
     fn set_width(&mut self, _width: usize) -> Result<(), String> {
@@ -398,6 +400,9 @@ pub trait Block: std::any::Any + Send + dyn_clone::DynClone {
     }
 
     /// Resets discrete state and writes the initial continuous states.
+    /// Called on each run's own copy of the block (a clone of the compiled
+    /// model's, which keeps no spare capacity): reserve working space that
+    /// grows during a run here, not at build.
     fn initialize(&mut self, _x0: &mut [f64]) {}
 
     /// Computes the outputs from the inputs, `io.x` and discrete state.

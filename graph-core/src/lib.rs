@@ -30,4 +30,4 @@ pub use diag::{Diagnostic, Pos};
 pub use flatten::{FlatGraph, OutputTimes, SimConfig, ZeroCrossing, load, load_str};
 pub use params::Params;
 pub use registry::{BlockType, Built, ParamDoc, PortDoc, Registry};
-pub use sim::{RunStats, SimError, Simulator, Snapshot};
+pub use sim::{RunState, RunStats, SimError, Simulator, Snapshot};

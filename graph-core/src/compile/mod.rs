@@ -45,6 +45,9 @@ pub struct BlockMeta {
     /// A continuous LTI block advanced by its exact zero-order-hold
     /// transition between major steps instead of being integrated.
     pub exact_zoh: bool,
+    /// Its interface declares the outputs constant between major steps
+    /// while the inputs are ([`crate::Interface::piecewise_constant`]).
+    pub piecewise_constant: bool,
 }
 
 /// The part of [`BlockMeta`] the step loop reads, kept compact and
@@ -52,9 +55,6 @@ pub struct BlockMeta {
 #[derive(Clone, Debug)]
 pub(crate) struct Slot {
     pub rate: Rate,
-    /// Whether the block's mode is frozen in minor steps (its zero
-    /// crossings are watched); set by the simulator.
-    pub frozen: bool,
     pub states: Range<usize>,
     pub inputs: Range<usize>,
     pub outputs: Range<usize>,
@@ -212,6 +212,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
             input_names: node.iface.inputs.iter().map(|p| p.name.clone()).collect(),
             output_names: node.iface.outputs.iter().map(|p| p.name.clone()).collect(),
             exact_zoh: false,
+            piecewise_constant: node.iface.piecewise_constant,
         });
         piecewise.push(node.iface.piecewise_constant);
         n_states += ns;
@@ -240,13 +241,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let external_outputs = wiring::external_outputs(&nodes, &direct, &out_offset);
     let slots = meta
         .iter()
-        .map(|m| Slot {
-            rate: m.rate,
-            frozen: false,
-            states: m.states.clone(),
-            inputs: m.inputs.clone(),
-            outputs: m.outputs.clone(),
-        })
+        .map(|m| Slot { rate: m.rate, states: m.states.clone(), inputs: m.inputs.clone(), outputs: m.outputs.clone() })
         .collect();
     let checks = crate::checks::compile(&g.checks, &headers(&columns), &g.parameters, g.analysis.is_some())?;
     for scope in &g.scopes {
@@ -319,6 +314,22 @@ fn resolved(w: Width, common: Option<usize>) -> usize {
 }
 
 impl Model {
+    /// Block `i` as compiled: its parameters and initial memory (each run
+    /// works on its own copy, see [`crate::RunState`]).
+    pub fn block(&self, i: usize) -> &dyn Block {
+        &*self.blocks[i]
+    }
+
+    /// Where block `i`'s inputs are in the signal buffer, in port order.
+    pub fn input_ports(&self, i: usize) -> &[Port] {
+        &self.in_ports[self.meta[i].inputs.clone()]
+    }
+
+    /// Where block `i`'s outputs are in the signal buffer, in port order.
+    pub fn output_ports(&self, i: usize) -> &[Port] {
+        &self.out_ports[self.meta[i].outputs.clone()]
+    }
+
     /// Column headers: `t`, then each recorded name (`name[k]`, 1-based, for
     /// vector signals).
     pub fn headers(&self) -> Vec<String> {

@@ -109,8 +109,9 @@ pub fn linearize(model: Model, sel: &Selection) -> Result<Linearization, Analysi
         sim.outputs().map_err(AnalysisError::Run)?;
     }
     let t = sim.time();
-    let (model, signals, x) = sim.operating_point();
-    let mut at_hit = Propagation::new(model, t, Mode::Instant);
+    let point = sim.operating_point();
+    let (signals, x) = (point.signals, point.x);
+    let mut at_hit = Propagation::new(point.model, point.blocks, t, Mode::Instant);
     at_hit.outputs(signals, x, u_at, open_at);
     at_hit.dynamics(signals, x);
     at_hit.refuse_unlinearizable()?;
@@ -194,8 +195,7 @@ fn sampled(
     let w_rows = at_hit.discrete_output_rows();
     let next = std::mem::take(&mut at_hit.next);
     let discrete_names = std::mem::take(&mut at_hit.extra_names);
-    let model = at_hit.model;
-    let mut between = Propagation::new(model, t, Mode::Interval);
+    let mut between = Propagation::new(at_hit.model, at_hit.blocks, t, Mode::Interval);
     between.outputs(signals, x, u_at, open_at);
     between.dynamics(signals, x);
     let nw = w_rows.len();

@@ -4,6 +4,7 @@
 
 use crate::compile::{Model, Rate};
 use crate::diag::Diagnostic;
+use crate::sim::RunBlock;
 use crate::sim::io_for;
 use ctlgraph_solver::StateSpace;
 
@@ -30,7 +31,9 @@ pub(super) enum Mode {
 /// where extra are the discrete states (Instant) or the held discrete
 /// outputs (Interval).
 pub(super) struct Propagation<'m> {
-    pub model: &'m mut Model,
+    pub model: &'m Model,
+    /// The run's blocks (their memory is read, and put back after a trial update).
+    pub blocks: &'m mut [RunBlock],
     t: f64,
     mode: Mode,
     pub nx: usize,
@@ -57,7 +60,7 @@ pub(super) struct Propagation<'m> {
 }
 
 impl<'m> Propagation<'m> {
-    pub fn new(model: &'m mut Model, t: f64, mode: Mode) -> Self {
+    pub fn new(model: &'m Model, blocks: &'m mut [RunBlock], t: f64, mode: Mode) -> Self {
         let nx = model.n_states;
         let n_blocks = model.meta.len();
         let mut discrete = vec![None; n_blocks];
@@ -72,9 +75,9 @@ impl<'m> Propagation<'m> {
             extra_start[i] = ne;
             let own = match mode {
                 Mode::Instant => {
-                    discrete[i] = model.blocks[i].discrete_lti();
+                    discrete[i] = blocks[i].discrete_lti();
                     if discrete[i].is_none() {
-                        memory[i] = model.blocks[i].discrete_state().map_or(0, |z| z.len());
+                        memory[i] = blocks[i].discrete_state().map_or(0, |z| z.len());
                     }
                     discrete[i].as_ref().map_or(memory[i], |ss| ss.n)
                 }
@@ -100,6 +103,7 @@ impl<'m> Propagation<'m> {
             perturbed: Vec::new(),
             warnings: Vec::new(),
             model,
+            blocks,
             t,
             mode,
             nx,
@@ -114,7 +118,7 @@ impl<'m> Propagation<'m> {
     /// The rows of every discrete block's output elements, in block,
     /// port and element order (the Interval mode's held variables).
     pub fn discrete_output_rows(&self) -> Vec<Vec<f64>> {
-        let m = &*self.model;
+        let m = self.model;
         (0..m.meta.len())
             .filter(|&i| matches!(m.slots[i].rate, Rate::Discrete(_)))
             .flat_map(|i| m.meta[i].outputs.clone())
@@ -205,7 +209,7 @@ impl<'m> Propagation<'m> {
                         Some(self.linear_rows(&ss.c, &ss.d, ss.n, own, &inputs, outputs.len()))
                     }
                     // Memoryless at its hits, or with memory to perturb.
-                    (Mode::Instant, None) if !self.model.blocks[i].updates() || self.memory[i] > 0 => {
+                    (Mode::Instant, None) if !self.blocks[i].updates() || self.memory[i] > 0 => {
                         self.perturbed.push(i);
                         let fed: Vec<usize> = inputs.iter().filter(|(_, f)| *f).map(|(o, _)| *o).collect();
                         Some(self.perturb(i, signals, x, &fed, Kind::Output))
@@ -214,8 +218,8 @@ impl<'m> Propagation<'m> {
                 },
                 // Sources are constants around the operating point.
                 _ if inputs.is_empty() && states.is_empty() => None,
-                _ if self.model.blocks[i].not_linearizable().is_some() => None,
-                _ => match self.model.blocks[i].lti().cloned() {
+                _ if self.blocks[i].not_linearizable().is_some() => None,
+                _ => match self.blocks[i].lti().cloned() {
                     Some(ss) => {
                         self.exact.push(i);
                         Some(self.linear_rows(&ss.c, &ss.d, ss.n, states.start, &inputs, outputs.len()))
@@ -270,7 +274,7 @@ impl<'m> Propagation<'m> {
             if states.is_empty() || self.model.slots[i].rate != Rate::Continuous {
                 continue;
             }
-            let rows = match self.model.blocks[i].lti().cloned() {
+            let rows = match self.blocks[i].lti().cloned() {
                 Some(ss) => self.linear_rows(&ss.a, &ss.b, ss.n, states.start, &inputs, ss.n),
                 None => {
                     let all: Vec<usize> = inputs.iter().map(|(o, _)| *o).collect();
@@ -302,7 +306,7 @@ impl<'m> Propagation<'m> {
             let value = match var {
                 Var::Input(o) => signals[o],
                 Var::State(k) => x[k],
-                Var::Memory(j) => self.model.blocks[i].discrete_state().map_or(0.0, |z| z[j]),
+                Var::Memory(j) => self.blocks[i].discrete_state().map_or(0.0, |z| z[j]),
             };
             let h = step(value);
             let mut at = |v: f64, signals: &mut [f64], x: &mut [f64]| {
@@ -310,7 +314,7 @@ impl<'m> Propagation<'m> {
                     Var::Input(o) => signals[o] = v,
                     Var::State(k) => x[k] = v,
                     Var::Memory(j) => {
-                        if let Some(z) = self.model.blocks[i].discrete_state() {
+                        if let Some(z) = self.blocks[i].discrete_state() {
                             z[j] = v;
                         }
                     }
@@ -383,12 +387,12 @@ impl<'m> Propagation<'m> {
 
     /// Block `i`'s outputs (or state derivatives) at the given values.
     fn evaluate(&mut self, i: usize, signals: &mut [f64], x: &[f64], kind: Kind) -> Vec<f64> {
-        let m = &mut *self.model;
+        let (m, blocks) = (self.model, &mut *self.blocks);
         let slot = &m.slots[i];
         match kind {
             Kind::Output => {
                 let mut io = io_for(slot, self.t, false, x, signals, &m.in_ports, &m.out_ports);
-                m.blocks[i].output(&mut io);
+                blocks[i].output(&mut io);
                 m.meta[i]
                     .outputs
                     .clone()
@@ -401,15 +405,15 @@ impl<'m> Propagation<'m> {
             Kind::Derivative => {
                 let io = io_for(slot, self.t, false, x, signals, &m.in_ports, &m.out_ports);
                 let mut dx = vec![0.0; slot.states.len()];
-                m.blocks[i].derivatives(&io, &mut dx);
+                blocks[i].derivatives(&io, &mut dx);
                 dx
             }
             // The next discrete state; the block's memory is put back.
             Kind::Update => {
-                let before = m.blocks[i].discrete_state().map(|z| z.to_vec()).unwrap_or_default();
+                let before = blocks[i].discrete_state().map(|z| z.to_vec()).unwrap_or_default();
                 let mut io = io_for(slot, self.t, false, x, signals, &m.in_ports, &m.out_ports);
-                m.blocks[i].update(&mut io);
-                let z = m.blocks[i].discrete_state().map_or(&mut [][..], |z| z);
+                blocks[i].update(&mut io);
+                let z = blocks[i].discrete_state().map_or(&mut [][..], |z| z);
                 let after = z.to_vec();
                 z.copy_from_slice(&before);
                 after
@@ -441,11 +445,11 @@ impl<'m> Propagation<'m> {
             let at = |why: String| {
                 Diagnostic::at(&m.pos, format!("block `{}` ({}) is on the analysed path: {why}", m.name, m.type_name))
             };
-            if let Some(why) = self.model.blocks[i].not_linearizable() {
+            if let Some(why) = self.blocks[i].not_linearizable() {
                 return Err(at(why.to_string()));
             }
             let discrete = matches!(self.model.slots[i].rate, Rate::Discrete(_));
-            let opaque = self.discrete[i].is_none() && self.memory[i] == 0 && self.model.blocks[i].updates();
+            let opaque = self.discrete[i].is_none() && self.memory[i] == 0 && self.blocks[i].updates();
             if discrete && self.mode == Mode::Instant && opaque {
                 return Err(at(format!(
                     "it is discrete (sample time {}) with memory, and has no linear model",

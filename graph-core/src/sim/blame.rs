@@ -16,7 +16,12 @@ pub(crate) struct Blame<'m> {
     pub(crate) out_ports: &'m [Port],
 }
 
-impl Blame<'_> {
+impl<'m> Blame<'m> {
+    /// What names `model`'s blocks.
+    pub(crate) fn of(model: &'m crate::compile::Model) -> Self {
+        Blame { meta: &model.meta, in_ports: &model.in_ports, out_ports: &model.out_ports }
+    }
+
     /// A signal that is not finite at `t` (called once a check found
     /// one): its block and output, with `diagnose`'s reason for that block.
     pub(crate) fn signal(&self, signals: &[f64], t: f64, diagnose: impl Fn(usize) -> Option<String>) -> SimError {

@@ -11,8 +11,8 @@ impl Simulator {
     /// generation (the lowest of the blocks' whose event it is). Cached in
     /// `next_event` and recomputed only when time reaches it.
     pub(super) fn earliest_event(&self) -> (f64, u32) {
-        let t = self.t;
-        self.model
+        let t = self.state.t;
+        self.state
             .blocks
             .iter()
             .fold((f64::INFINITY, 0), |best, b| earlier(best, b.next_event(t), || b.event_generation(t)))
@@ -25,31 +25,32 @@ impl Simulator {
         if self.history.is_empty() {
             return;
         }
-        let t = self.t;
+        let s = &mut self.state;
+        let t = s.t;
         let mut sys = Minor {
-            model: &mut self.model,
-            signals: &mut self.signals,
+            model: &self.model,
+            blocks: &mut s.blocks,
+            signals: &mut s.signals,
             continuous: &self.minor,
             at_start: None,
-            stateful: &self.called,
+            stateful: &self.stateful,
             integrands: &self.integrands,
             computed_at: &mut self.computed_at,
             t_end: t,
         };
-        sys.outputs(t, &self.x);
+        sys.outputs(t, &s.x);
         self.hand_left_limits(at);
     }
 
     /// [`Block::left_limit`] of the blocks keeping history, with the
     /// signals as they stand.
     pub(super) fn hand_left_limits(&mut self, at: Breakpoint) {
-        self.events_may_change = true;
-        let m = &mut self.model;
+        let (m, s) = (&*self.model, &mut self.state);
+        s.events_may_change = true;
         for &i in &self.history {
-            let slot = &m.slots[i];
-            let io = io_for(slot, self.t, true, &self.x, &mut self.signals, &m.in_ports, &m.out_ports)
-                .in_minor_step(slot.frozen);
-            m.blocks[i].left_limit(&io, at);
+            let io = io_for(&m.slots[i], s.t, true, &s.x, &mut s.signals, &m.in_ports, &m.out_ports)
+                .in_minor_step(s.blocks[i].frozen);
+            s.blocks[i].left_limit(&io, at);
         }
     }
 }

@@ -12,8 +12,9 @@
 //! with `zero_crossing: adaptive` turn that block's detection off with a
 //! warning. Either way a Zeno model cannot hang.
 
+use super::RunBlock;
 use super::{Minor, SimError, io_for};
-use crate::compile::{Model, Slot};
+use crate::compile::Model;
 use crate::flatten::ZeroCrossing;
 use ctlgraph_solver::Integrator;
 use std::ops::Range;
@@ -120,14 +121,14 @@ impl Watch {
         }
     }
 
-    /// Back to the start of a run (detection re-enabled); marks in `slots`
+    /// Back to the start of a run (detection re-enabled); marks in `blocks`
     /// which blocks have their modes frozen in minor steps.
-    pub fn reset(&mut self, slots: &mut [Slot]) {
+    pub fn reset(&mut self, blocks: &mut [RunBlock]) {
         let on = self.mode != ZeroCrossing::Off;
         self.active.iter_mut().for_each(|a| *a = on);
-        slots.iter_mut().for_each(|s| s.frozen = false);
+        blocks.iter_mut().for_each(|b| b.frozen = false);
         for &i in &self.blocks {
-            slots[i].frozen = on;
+            blocks[i].frozen = on;
         }
         self.sign.iter_mut().for_each(|s| *s = 0.0);
         self.events = 0;
@@ -144,20 +145,20 @@ impl Watch {
     /// that the next step's end is compared with.
     /// Inlined, so a graph without watched blocks pays one test, not a call.
     #[inline]
-    pub fn record_signs(&mut self, model: &mut Model, signals: &mut [f64], x: &[f64], t: f64) {
+    pub fn record_signs(&mut self, model: &Model, blocks: &mut [RunBlock], signals: &mut [f64], x: &[f64], t: f64) {
         if !self.blocks.is_empty() {
-            self.record_watched_signs(model, signals, x, t);
+            self.record_watched_signs(model, blocks, signals, x, t);
         }
     }
 
-    fn record_watched_signs(&mut self, model: &mut Model, signals: &mut [f64], x: &[f64], t: f64) {
+    fn record_watched_signs(&mut self, model: &Model, blocks: &mut [RunBlock], signals: &mut [f64], x: &[f64], t: f64) {
         for (b, &i) in self.blocks.iter().enumerate() {
             if !self.active[b] {
                 continue;
             }
             let r = self.ranges[b].clone();
             let io = io_for(&model.slots[i], t, false, x, signals, &model.in_ports, &model.out_ports);
-            model.blocks[i].zero_crossings(&io, &mut self.g0[r.clone()]);
+            blocks[i].zero_crossings(&io, &mut self.g0[r.clone()]);
             for k in r {
                 if self.g0[k] != 0.0 {
                     self.sign[k] = self.g0[k].signum();
@@ -218,7 +219,7 @@ impl Watch {
                     }
                 }
                 self.start_sign[k] = 0.0;
-                let direction = sys.model.blocks[self.blocks[b]].crossing_direction(k - self.ranges[b].start);
+                let direction = sys.blocks[self.blocks[b]].crossing_direction(k - self.ranges[b].start);
                 if s == 0.0 || self.g1[k] * s >= 0.0 || !direction.accepts(s) {
                     continue;
                 }

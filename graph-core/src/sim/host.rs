@@ -11,47 +11,12 @@
 //! An adaptive method's steps are cut at each landing time, which changes
 //! them (within the tolerances).
 
-use super::{Clock, Dense, Held, SimError, Simulator, Watch};
-use crate::block::Block;
+use super::{RunState, SimError, Simulator};
 use crate::diag::Diagnostic;
-use ctlgraph_solver::Integrator;
 
-/// A run's complete state at one instant — time, states, signals, every
-/// block's memory, the solver's and the event detection's — to return to
-/// with [`Simulator::restore`]. Restoring and running on gives the same
-/// numbers as running on from where it was taken.
-#[derive(Clone)]
-pub struct Snapshot {
-    /// Which simulator it was taken of (a snapshot fits only that model).
-    owner: u64,
-    blocks: Vec<Box<dyn Block>>,
-    frozen: Vec<bool>,
-    signals: Vec<f64>,
-    x: Vec<f64>,
-    integ: Integrator,
-    clocks: Vec<Clock>,
-    grid: Clock,
-    t: f64,
-    stop: f64,
-    first: bool,
-    next_event: f64,
-    next_event_generation: u32,
-    events_may_change: bool,
-    major_steps: u64,
-    stalled: u32,
-    watch: Watch,
-    held: Vec<Held>,
-    at_event: bool,
-    inputs_changed: bool,
-    dense: Option<Dense>,
-}
-
-impl Snapshot {
-    /// The time it was taken at.
-    pub fn time(&self) -> f64 {
-        self.t
-    }
-}
+/// A run's complete state at one instant, to return to with
+/// [`Simulator::restore`]: the [`RunState`] itself.
+pub type Snapshot = RunState;
 
 impl Simulator {
     /// The graph's inputs (top-level `inport` blocks), in execution order.
@@ -80,7 +45,7 @@ impl Simulator {
                 },
             ));
         };
-        let Some(width) = self.model.blocks[block].external_input().map(|held| held.len()) else {
+        let Some(width) = self.state.blocks[block].external_input().map(|held| held.len()) else {
             return Err(Diagnostic::plain(format!("input `{name}` holds no value (internal error)")));
         };
         if width != value.len() {
@@ -89,14 +54,14 @@ impl Simulator {
         if let Some(bad) = value.iter().find(|v| !v.is_finite()) {
             return Err(Diagnostic::plain(format!("input `{name}`: {bad} is not a finite number")));
         }
-        if !self.first && !self.inputs_changed {
+        if !self.state.first && !self.state.inputs_changed {
             // The outputs at this time, with the input before, are its left limit.
             self.hand_left_limits(crate::block::Breakpoint { generation: 0, sample_hit_only: false });
         }
-        if let Some(held) = self.model.blocks[block].external_input() {
+        if let Some(held) = self.state.blocks[block].external_input() {
             held.copy_from_slice(value);
         }
-        self.inputs_changed = true;
+        self.state.inputs_changed = true;
         Ok(())
     }
 
@@ -104,10 +69,10 @@ impl Simulator {
     /// at `t`). `t` may lie beyond the graph's stop time, which then moves
     /// to `t`; a time before the present is an error.
     pub fn advance_to(&mut self, t: f64) -> Result<(), SimError> {
-        if !t.is_finite() || t < self.t - self.tol {
-            return Err(SimError::Host(format!("cannot advance to t = {t} from t = {}", self.t)));
+        if !t.is_finite() || t < self.state.t - self.tol {
+            return Err(SimError::Host(format!("cannot advance to t = {t} from t = {}", self.state.t)));
         }
-        self.stop = self.stop.max(t);
+        self.state.stop = self.state.stop.max(t);
         self.refresh()?;
         self.pause = t;
         let result = self.advance_to_pause(t);
@@ -118,14 +83,14 @@ impl Simulator {
     /// Computes the outputs at the present time if nothing has yet, or an
     /// input changed since.
     fn refresh(&mut self) -> Result<(), SimError> {
-        if self.first || self.inputs_changed {
+        if self.state.first || self.state.inputs_changed {
             self.outputs()?;
         }
         Ok(())
     }
 
     fn advance_to_pause(&mut self, t: f64) -> Result<(), SimError> {
-        while self.t < t - self.tol {
+        while self.state.t < t - self.tol {
             self.advance()?;
             self.outputs()?;
         }
@@ -140,7 +105,7 @@ impl Simulator {
                 .suggest(name, self.output_names())
                 .or_hint("the graph's outputs are its top-level `outport` blocks"));
         };
-        Ok(&self.signals[port.offset..port.offset + port.width])
+        Ok(&self.state.signals[port.offset..port.offset + port.width])
     }
 
     fn external_output(&self, name: &str) -> Option<crate::block::Port> {
@@ -159,55 +124,23 @@ impl Simulator {
                 None => self.model.signal_port(name)?,
             },
         };
-        Ok(&self.signals[port.offset..port.offset + port.width])
+        Ok(&self.state.signals[port.offset..port.offset + port.width])
     }
 
-    /// The run as it stands, to return to later ([`Simulator::restore`]).
-    /// Copies every block, so take it at the moments to come back to
-    /// rather than at every step.
+    /// The run as it stands, to return to later ([`Simulator::restore`]):
+    /// a clone of its [`RunState`], every block's memory included, so take
+    /// it at the moments to come back to rather than at every step.
     pub fn state(&self) -> Snapshot {
-        Snapshot {
-            owner: self.id,
-            blocks: self.model.blocks.clone(),
-            frozen: self.model.slots.iter().map(|s| s.frozen).collect(),
-            signals: self.signals.clone(),
-            x: self.x.clone(),
-            integ: self.integ.clone(),
-            clocks: self.clocks.clone(),
-            grid: self.grid,
-            t: self.t,
-            stop: self.stop,
-            first: self.first,
-            next_event: self.next_event,
-            next_event_generation: self.next_event_generation,
-            events_may_change: self.events_may_change,
-            major_steps: self.major_steps,
-            stalled: self.stalled,
-            watch: self.watch.clone(),
-            held: self.held.clone(),
-            at_event: self.at_event,
-            inputs_changed: self.inputs_changed,
-            dense: self.dense.clone(),
-        }
+        self.state.clone()
     }
 
     /// Returns the run to `snapshot`, taken of this simulator.
     pub fn restore(&mut self, snapshot: &Snapshot) -> Result<(), Diagnostic> {
-        if snapshot.owner != self.id {
+        if snapshot.owner != self.state.owner {
             return Err(Diagnostic::plain("the snapshot was taken of another simulator")
                 .with_hint("restore a snapshot into the simulator whose `state()` made it"));
         }
-        let s = snapshot.clone();
-        self.model.blocks = s.blocks;
-        for (slot, frozen) in self.model.slots.iter_mut().zip(s.frozen) {
-            slot.frozen = frozen;
-        }
-        (self.signals, self.x, self.integ, self.clocks, self.grid) = (s.signals, s.x, s.integ, s.clocks, s.grid);
-        (self.t, self.stop, self.first) = (s.t, s.stop, s.first);
-        (self.next_event, self.next_event_generation) = (s.next_event, s.next_event_generation);
-        self.events_may_change = s.events_may_change;
-        (self.major_steps, self.stalled, self.watch, self.held) = (s.major_steps, s.stalled, s.watch, s.held);
-        (self.at_event, self.inputs_changed, self.dense) = (s.at_event, s.inputs_changed, s.dense);
+        self.state.clone_from(snapshot);
         self.outputs_current = false;
         self.computed_at.forget();
         Ok(())

@@ -2,6 +2,7 @@
 //! outputs recomputed at each stage, discrete outputs held.
 
 use super::io_for;
+use super::state::RunBlock;
 use super::visit::{ComputedAt, Integrand, Visit, sweep};
 use crate::compile::Model;
 use ctlgraph_solver::OdeSystem;
@@ -10,7 +11,8 @@ use ctlgraph_solver::OdeSystem;
 /// frozen where zero crossings are watched), ask stateful blocks for
 /// derivatives. Discrete outputs hold.
 pub(super) struct Minor<'a> {
-    pub(super) model: &'a mut Model,
+    pub(super) model: &'a Model,
+    pub(super) blocks: &'a mut [RunBlock],
     pub(super) signals: &'a mut [f64],
     pub(super) continuous: &'a [Visit],
     /// Set when the signals hold the major step's outputs at the step's
@@ -40,7 +42,7 @@ impl Minor<'_> {
     /// integrators' already copied).
     #[inline(always)]
     fn run(&mut self, visits: &[Visit], t: f64, x: &[f64]) {
-        let (m, computed_at) = (&mut *self.model, &mut *self.computed_at);
+        let (m, blocks, computed_at) = (self.model, &mut *self.blocks, &mut *self.computed_at);
         let left = t >= self.t_end;
         sweep(
             visits,
@@ -49,10 +51,10 @@ impl Minor<'_> {
             #[inline(always)]
             |v, signals| {
                 if computed_at.must_run(v, t, left) {
-                    let meta = &m.slots[v.block];
+                    let (slot, block) = (&m.slots[v.block], &mut blocks[v.block]);
                     let mut io =
-                        io_for(meta, t, left, x, signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
-                    m.blocks[v.block].output(&mut io);
+                        io_for(slot, t, left, x, signals, &m.in_ports, &m.out_ports).in_minor_step(block.frozen);
+                    block.output(&mut io);
                 }
             },
         );
@@ -60,22 +62,21 @@ impl Minor<'_> {
 
     /// Block `i`'s zero-crossing functions at (t, x), outputs computed.
     pub(super) fn zero_crossings(&mut self, i: usize, t: f64, x: &[f64], g: &mut [f64]) {
-        let m = &mut *self.model;
-        let meta = &m.slots[i];
-        let io =
-            io_for(meta, t, t >= self.t_end, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
-        m.blocks[i].zero_crossings(&io, g);
+        let (m, block) = (self.model, &self.blocks[i]);
+        let io = io_for(&m.slots[i], t, t >= self.t_end, x, self.signals, &m.in_ports, &m.out_ports)
+            .in_minor_step(block.frozen);
+        block.zero_crossings(&io, g);
     }
 
     /// The stateful blocks' derivatives at (t, x), outputs computed.
     #[inline(always)]
     fn stateful_derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
-        let m = &mut *self.model;
+        let m = self.model;
         let left = t >= self.t_end;
         for &i in self.stateful {
-            let meta = &m.slots[i];
-            let io = io_for(meta, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(meta.frozen);
-            m.blocks[i].derivatives(&io, &mut dx[meta.states.clone()]);
+            let (slot, block) = (&m.slots[i], &mut self.blocks[i]);
+            let io = io_for(slot, t, left, x, self.signals, &m.in_ports, &m.out_ports).in_minor_step(block.frozen);
+            block.derivatives(&io, &mut dx[slot.states.clone()]);
         }
         for integrator in self.integrands {
             integrator.derivatives(self.signals, dx);

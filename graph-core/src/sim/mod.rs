@@ -18,12 +18,15 @@ mod events;
 mod host;
 mod minor;
 mod output;
+mod state;
 pub(crate) mod visit;
 pub(crate) use blame::Blame;
 pub use clock::earlier;
 pub(crate) use clock::{Clock, OnGrid, Timing, breakpoint, mark_hits, next_major_time};
 pub use error::SimError;
 pub use host::Snapshot;
+pub(crate) use state::RunBlock;
+pub use state::RunState;
 
 use crate::block::{Io, Port};
 use crate::compile::{Model, Rate, Slot};
@@ -33,6 +36,7 @@ use events::Watch;
 use minor::{Minor, stale_at_start};
 use output::Dense;
 use std::ops::Range;
+use std::sync::Arc;
 use visit::{ComputedAt, Integrand, Visit};
 
 /// Counters for the run report.
@@ -44,43 +48,26 @@ pub struct RunStats {
     pub events: u64,
 }
 
-/// Numbers simulators, so a snapshot is restored only where it was taken.
+/// Numbers run states, so a snapshot is restored only where it was taken.
 static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
-/// A model being simulated.
+/// A model being simulated: the compiled model (shared), the plan this
+/// simulator derives from it once (which blocks each sweep visits), the
+/// run's state ([`RunState`], everything that changes) and scratch.
 pub struct Simulator {
-    model: Model,
-    signals: Vec<f64>,
-    x: Vec<f64>,
-    integ: Integrator,
-    clocks: Vec<Clock>,
-    /// Fixed-step grid: its step (0 for the adaptive methods) and position.
+    model: Arc<Model>,
+    state: RunState,
+    /// Fixed-step grid step (0 for the adaptive methods).
     grid_step: f64,
-    grid: Clock,
-    t: f64,
-    stop: f64,
     /// Times closer than this are the same major step.
     tol: f64,
-    first: bool,
-    /// Earliest block event after `t` (see [`Simulator::earliest_event`])
-    /// and its [`Breakpoint::generation`].
-    next_event: f64,
-    next_event_generation: u32,
-    /// Blocks were handed a breakpoint's left limit: their updates may
-    /// schedule events (a delay's arrivals), so `next_event` is recomputed.
-    events_may_change: bool,
-    major_steps: u64,
-    /// Major steps in a row at which time did not advance.
-    stalled: u32,
-    /// Zero-crossing functions and their detection.
-    watch: Watch,
     /// How many states the solver integrates (from the model's plan,
     /// [`crate::compile::Between`]), and the blocks they belong to: the
-    /// plain integrators, and the others (whose `derivatives` and
-    /// `clamp_states` are called).
+    /// plain integrators, and the others, called for their derivatives
+    /// and `clamp_states` (`stateful`).
     n_integrated: usize,
     integrands: Vec<Integrand>,
-    called: Vec<usize>,
+    stateful: Vec<usize>,
     /// LTI blocks stepped exactly (see [`crate::compile::Between`]).
     held: Vec<Held>,
     /// Blocks with an `update` to run (execution order).
@@ -101,59 +88,64 @@ pub struct Simulator {
     /// When the time-only blocks last ran, to skip them at the same time.
     computed_at: ComputedAt,
     outputs_current: bool,
-    /// Whether this major step is at a block event (see `Between::event_only`).
-    at_event: bool,
-    /// A host set an input since the last outputs (see [`Simulator::set_input`]).
-    inputs_changed: bool,
     /// Where [`Simulator::advance_to`] must land (infinite otherwise).
     pause: f64,
-    /// Rows between major steps, when `simulation.output` asks for them.
-    dense: Option<Dense>,
-    /// Tells this simulator's snapshots from others'.
-    id: u64,
 }
 
-/// A held LTI block: its exact transitions, its input at the last major
-/// step, and where that input and its states are.
+/// A run where it stands, for linearisation ([`Simulator::operating_point`]).
+pub(crate) struct OperatingPoint<'a> {
+    pub model: &'a Model,
+    pub blocks: &'a mut [RunBlock],
+    pub signals: &'a mut [f64],
+    pub x: &'a mut [f64],
+}
+
+/// A held LTI block: its exact transitions, and where its input, its
+/// latched copy (in [`RunState::held_inputs`]) and its states are.
 #[derive(Clone)]
 struct Held {
     zoh: Zoh,
-    u: Vec<f64>,
     input: Range<usize>,
+    latched: Range<usize>,
     states: Range<usize>,
 }
 
 impl Simulator {
     /// Prepares a run of `model` to `stop` (the graph's own stop time when
-    /// `None`) and computes the initial states.
-    pub fn new(model: Model, stop: Option<f64>) -> Self {
+    /// `None`) and computes the initial states. A model in an [`Arc`] is
+    /// shared, not copied: many runs (threads, sweep cases) may use one.
+    pub fn new(model: impl Into<Arc<Model>>, stop: Option<f64>) -> Self {
+        let model: Arc<Model> = model.into();
         let stop = stop.unwrap_or(model.sim.stop);
         let Timing { method, grid_step, grid, clocks, tol } = Timing::new(&model, stop);
         let continuous: Vec<usize> =
             (0..model.meta.len()).filter(|&i| model.meta[i].rate == Rate::Continuous).collect();
         let watch = Watch::new(&model, &continuous, model.sim.zero_crossing);
+        let mut latched = 0;
         let held = model
             .between
             .held
             .iter()
             .filter_map(|&block| {
                 let ss = model.blocks[block].lti()?.clone();
-                let (slot, u) = (&model.slots[block], vec![0.0; ss.m]);
+                let slot = &model.slots[block];
                 let port = model.in_ports[slot.inputs.start];
                 let input = port.offset..port.offset + port.width;
-                Some(Held { zoh: Zoh::new(ss), u, input, states: slot.states.clone() })
+                latched += ss.m;
+                let latched = latched - ss.m..latched;
+                Some(Held { zoh: Zoh::new(ss), input, latched, states: slot.states.clone() })
             })
             .collect();
         let n = model.blocks.len();
         // The integrated blocks: plain integrators, copied, and the others, called.
-        let (mut integrands, mut called, mut plain) = (Vec::new(), Vec::new(), vec![false; n]);
+        let (mut integrands, mut stateful, mut plain) = (Vec::new(), Vec::new(), vec![false; n]);
         for &i in &model.between.integrated {
             match Integrand::of(&model, i) {
                 Some(integrand) => {
                     integrands.push(integrand);
                     plain[i] = true;
                 }
-                None => called.push(i),
+                None => stateful.push(i),
             }
         }
         // The output sweeps' visits; the plain integrators' outputs are copied apart.
@@ -162,27 +154,15 @@ impl Simulator {
         let stale = stale_at_start(&model, &minor);
         let varying =
             visits(&mut (0..n).filter(|&i| model.slots[i].rate == Rate::Continuous && !model.between.event_only[i]));
-        let output_times = model.sim.output;
+        let mut state =
+            RunState::new(&model, stop, Integrator::new(method, model.between.n_integrated), clocks, grid, watch);
+        state.held_inputs = vec![0.0; latched];
         let mut sim = Simulator {
-            signals: vec![0.0; model.signal_len],
-            x: vec![0.0; model.n_states],
-            integ: Integrator::new(method, model.between.n_integrated),
-            clocks,
             grid_step,
-            grid,
-            t: 0.0,
-            stop,
             tol,
-            first: true,
-            next_event: f64::INFINITY,
-            next_event_generation: 0,
-            events_may_change: false,
-            major_steps: 0,
-            stalled: 0,
-            watch,
             held,
             integrands,
-            called,
+            stateful,
             n_integrated: model.between.n_integrated,
             updating: Visit::list(&model, (0..n).filter(|&i| model.blocks[i].updates())),
             history: (0..n).filter(|&i| model.blocks[i].keeps_history()).collect(),
@@ -194,39 +174,36 @@ impl Simulator {
             stale_at_start: stale,
             computed_at: ComputedAt::new(n),
             outputs_current: false,
-            at_event: true,
-            inputs_changed: false,
             pause: f64::INFINITY,
-            dense: None,
-            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            state,
             model,
         };
-        sim.dense = Dense::new(&sim, output_times, varying);
+        sim.state.dense = Dense::new(&sim, sim.model.sim.output, varying);
         sim.reset();
         sim
     }
 
     /// Back to t = 0 with initial states (blocks re-initialised).
     pub fn reset(&mut self) {
-        self.t = 0.0;
-        self.first = true;
+        self.state.t = 0.0;
+        self.state.first = true;
         self.outputs_current = false;
-        self.major_steps = 0;
-        self.grid.set_tick(1);
-        self.signals.iter_mut().for_each(|s| *s = 0.0);
+        self.state.major_steps = 0;
+        self.state.grid.set_tick(1);
+        self.state.signals.iter_mut().for_each(|s| *s = 0.0);
         self.computed_at.forget();
-        for (b, m) in self.model.blocks.iter_mut().zip(&self.model.slots) {
-            b.initialize(&mut self.x[m.states.clone()]);
+        for (b, m) in self.state.blocks.iter_mut().zip(&self.model.slots) {
+            b.initialize(&mut self.state.x[m.states.clone()]);
         }
-        for c in &mut self.clocks {
+        for c in &mut self.state.clocks {
             c.set_tick(0);
         }
         self.mark_hits();
-        (self.next_event, self.next_event_generation) = self.earliest_event();
-        self.events_may_change = false;
-        self.integ.reset();
-        self.watch.reset(&mut self.model.slots);
-        if let Some(dense) = &mut self.dense {
+        (self.state.next_event, self.state.next_event_generation) = self.earliest_event();
+        self.state.events_may_change = false;
+        self.state.integ.reset();
+        self.state.watch.reset(&mut self.state.blocks);
+        if let Some(dense) = &mut self.state.dense {
             dense.reset();
         }
     }
@@ -236,53 +213,63 @@ impl Simulator {
     }
 
     pub fn time(&self) -> f64 {
-        self.t
+        self.state.t
     }
 
     pub fn stop_time(&self) -> f64 {
-        self.stop
+        self.state.stop
     }
 
     pub fn method(&self) -> Method {
-        self.integ.method()
+        self.state.integ.method()
     }
 
-    /// The model, signals and states as they stand (for linearisation
-    /// around the point the run has reached).
-    pub(crate) fn operating_point(&mut self) -> (&mut Model, &mut [f64], &mut [f64]) {
+    /// The compiled model, shared: another run of it needs no compiling.
+    pub fn shared_model(&self) -> Arc<Model> {
+        Arc::clone(&self.model)
+    }
+
+    /// The model, the blocks, signals and states as they stand (for
+    /// linearisation around the point the run has reached).
+    pub(crate) fn operating_point(&mut self) -> OperatingPoint<'_> {
         self.outputs_current = false;
-        (&mut self.model, &mut self.signals, &mut self.x)
+        let s = &mut self.state;
+        OperatingPoint { model: &self.model, blocks: &mut s.blocks, signals: &mut s.signals, x: &mut s.x }
     }
 
     /// The signal buffer (index with [`crate::compile::Column`] offsets).
     pub fn signals(&self) -> &[f64] {
-        &self.signals
+        &self.state.signals
     }
 
     pub fn states(&self) -> &[f64] {
-        &self.x
+        &self.state.x
     }
 
     pub fn stats(&self) -> RunStats {
-        RunStats { major_steps: self.major_steps, solver: self.integ.stats(), events: self.watch.events }
+        RunStats {
+            major_steps: self.state.major_steps,
+            solver: self.state.integ.stats(),
+            events: self.state.watch.events,
+        }
     }
 
     /// What the run has to say beyond its numbers (blocks whose chattering
     /// crossings `zero_crossing: adaptive` ignored).
     pub fn warnings(&self) -> &[String] {
-        &self.watch.warnings
+        &self.state.watch.warnings
     }
 
     /// About how many major steps the run takes: the fixed-step grid plus
     /// the sample hits that fall between its points. For the adaptive
     /// methods, whose steps `max_step` bounds, it is a floor.
     pub fn expected_major_steps(&self) -> f64 {
-        let mut n = self.stop / self.integ.method().max_step();
-        for c in &self.clocks {
+        let mut n = self.state.stop / self.state.integ.method().max_step();
+        for c in &self.state.clocks {
             let ratio = c.grid.step / self.grid_step;
             let on_grid = self.grid_step > 0.0 && ratio >= 0.5 && (ratio - ratio.round()).abs() <= 1e-9 * ratio;
             if !on_grid {
-                n += (self.stop - c.offset).max(0.0) / c.grid.step;
+                n += (self.state.stop - c.offset).max(0.0) / c.grid.step;
             }
         }
         n.ceil()
@@ -290,12 +277,12 @@ impl Simulator {
 
     /// Whether the run has reached its stop time.
     pub fn finished(&self) -> bool {
-        self.t >= self.stop - self.tol && !self.first
+        self.state.t >= self.state.stop - self.tol && !self.state.first
     }
 
     /// Takes clocks whose next hit is (within tolerance) now.
     fn mark_hits(&mut self) -> bool {
-        mark_hits(&mut self.clocks, self.t, self.tol)
+        mark_hits(&mut self.state.clocks, self.state.t, self.tol)
     }
 
     /// Runs `output` of every block due now, in execution order:
@@ -303,24 +290,24 @@ impl Simulator {
     /// at events), discrete blocks at their hits, constant blocks on the
     /// first pass only.
     fn sweep(&mut self) {
-        let m = &mut self.model;
-        let all = self.first || self.at_event || self.inputs_changed;
+        let (m, s) = (&*self.model, &mut self.state);
+        let all = s.first || s.at_event || s.inputs_changed;
         let order = if all { &self.every } else { &self.regular };
         for integrator in &self.integrands {
-            integrator.output(&self.x, &mut self.signals);
+            integrator.output(&s.x, &mut s.signals);
         }
-        let (clocks, first, t, x) = (&self.clocks, self.first, self.t, &self.x);
+        let (clocks, first, t, x, blocks) = (&s.clocks, s.first, s.t, &s.x, &mut s.blocks);
         let computed_at = &mut self.computed_at;
         visit::sweep(
             order,
-            &mut self.signals,
+            &mut s.signals,
             |v| due(v.rate, clocks, first),
             #[inline(always)]
             |v, signals| {
                 if computed_at.must_run(v, t, false) {
                     let slot = &m.slots[v.block];
                     let mut io = io_for(slot, t, false, x, signals, &m.in_ports, &m.out_ports);
-                    m.blocks[v.block].output(&mut io);
+                    blocks[v.block].output(&mut io);
                 }
             },
         );
@@ -329,12 +316,12 @@ impl Simulator {
     /// Runs `update` of the blocks that have one (see [`crate::block::Block::updates`])
     /// and are due now: continuous ones always, discrete ones at hits.
     fn update_sweep(&mut self) {
-        let m = &mut self.model;
+        let (m, s) = (&*self.model, &mut self.state);
         for v in &self.updating {
-            if due(v.rate, &self.clocks, false) {
+            if due(v.rate, &s.clocks, false) {
                 let slot = &m.slots[v.block];
-                let mut io = io_for(slot, self.t, false, &self.x, &mut self.signals, &m.in_ports, &m.out_ports);
-                m.blocks[v.block].update(&mut io);
+                let mut io = io_for(slot, s.t, false, &s.x, &mut s.signals, &m.in_ports, &m.out_ports);
+                s.blocks[v.block].update(&mut io);
             }
         }
     }
@@ -347,32 +334,28 @@ impl Simulator {
         if self.major_step_events() {
             self.sweep();
         }
-        self.first = false;
-        self.inputs_changed = false;
-        self.watch.record_signs(&mut self.model, &mut self.signals, &self.x, self.t);
-        if !all_finite(&self.signals) {
-            let m = &self.model;
-            return Err(self.blame().signal(&self.signals, self.t, |i| m.blocks[i].diagnose()));
+        let s = &mut self.state;
+        s.first = false;
+        s.inputs_changed = false;
+        s.watch.record_signs(&self.model, &mut s.blocks, &mut s.signals, &s.x, s.t);
+        if !all_finite(&s.signals) {
+            let s = &self.state;
+            return Err(Blame::of(&self.model).signal(&s.signals, s.t, |i| s.blocks[i].diagnose()));
         }
         self.outputs_current = true;
         Ok(())
     }
 
-    /// What names a block in this model's errors.
-    fn blame(&self) -> Blame<'_> {
-        Blame { meta: &self.model.meta, in_ports: &self.model.in_ports, out_ports: &self.model.out_ports }
-    }
-
     /// Blocks with zero crossings may reset their states at a major step;
     /// returns whether any did.
     fn major_step_events(&mut self) -> bool {
-        let m = &mut self.model;
+        let (m, s) = (&*self.model, &mut self.state);
         let mut changed = false;
-        for &i in &self.watch.blocks {
+        for &i in &s.watch.blocks {
             let slot = &m.slots[i];
             let (inputs, outputs) = (&m.in_ports[slot.inputs.clone()], &m.out_ports[slot.outputs.clone()]);
-            let io = Io::new(self.t, false, &[], &mut self.signals, inputs, outputs);
-            changed |= m.blocks[i].major_step(&io, &mut self.x[slot.states.clone()]);
+            let io = Io::new(s.t, false, &[], &mut s.signals, inputs, outputs);
+            changed |= s.blocks[i].major_step(&io, &mut s.x[slot.states.clone()]);
         }
         changed
     }
@@ -382,93 +365,92 @@ impl Simulator {
     /// to the first zero crossing before it.
     pub fn advance(&mut self) -> Result<(), SimError> {
         self.update_sweep();
-        if std::mem::take(&mut self.events_may_change) {
-            (self.next_event, self.next_event_generation) = self.earliest_event();
-        }
-        for h in &mut self.held {
-            for (u, &s) in h.u.iter_mut().zip(&self.signals[h.input.clone()]) {
-                *u = s;
-            }
+        if std::mem::take(&mut self.state.events_may_change) {
+            (self.state.next_event, self.state.next_event_generation) = self.earliest_event();
         }
         let target = self.next_major_time();
-        let t0 = self.t;
-        if let Some(dense) = &mut self.dense {
-            dense.start(t0, &self.x);
+        let (m, s) = (&*self.model, &mut self.state);
+        for h in &self.held {
+            s.held_inputs[h.latched.clone()].copy_from_slice(&s.signals[h.input.clone()]);
         }
-        let current = std::mem::take(&mut self.outputs_current) && !self.inputs_changed;
+        let t0 = s.t;
+        if let Some(dense) = &mut s.dense {
+            dense.start(t0, &s.x);
+        }
+        let current = std::mem::take(&mut self.outputs_current) && !s.inputs_changed;
         let mut sys = Minor {
-            model: &mut self.model,
-            signals: &mut self.signals,
+            model: m,
+            blocks: &mut s.blocks,
+            signals: &mut s.signals,
             continuous: &self.minor,
             at_start: current.then_some(&self.stale_at_start[..]),
-            stateful: &self.called,
+            stateful: &self.stateful,
             integrands: &self.integrands,
             computed_at: &mut self.computed_at,
             t_end: target,
         };
-        let x = &mut self.x[..self.n_integrated];
+        let x = &mut s.x[..self.n_integrated];
         let mut t_new = if x.is_empty() {
             // Nothing to integrate; max_step still bounds the adaptive
             // method's major steps so continuous sources are sampled finely.
-            target.min(t0 + self.integ.method().max_step())
+            target.min(t0 + s.integ.method().max_step())
         } else {
-            match self.integ.advance(&mut sys, t0, target, x) {
+            match s.integ.advance(&mut sys, t0, target, x) {
                 Ok(t) => t,
-                Err(error) => return Err(self.blame().solver(&self.signals, t0, error)),
+                Err(error) => return Err(Blame::of(m).solver(sys.signals, t0, error)),
             }
         };
-        if let Some(dense) = &mut self.dense {
+        if let Some(dense) = &mut s.dense {
             dense.solver_end(t_new, x);
         }
-        let event = self.watch.locate(&mut sys, &mut self.integ, t0, t_new, x);
+        let event = s.watch.locate(&mut sys, &mut s.integ, t0, t_new, x);
         if let Some(t_event) = event {
             t_new = t_event;
-            for (block, k) in self.watch.fired() {
-                self.model.blocks[block].crossing_located(k);
+            for (block, k) in s.watch.fired() {
+                s.blocks[block].crossing_located(k);
             }
-            self.integ.invalidate();
-            if let Some(block) = self.watch.count_event(t_event, &self.model)? {
-                self.model.slots[block].frozen = false;
+            s.integ.invalidate();
+            if let Some(block) = s.watch.count_event(t_event, m)? {
+                s.blocks[block].frozen = false;
             }
         }
         // Land exactly on the target when the solver reached it.
-        self.t = if (target - t_new).abs() <= self.tol { target } else { t_new };
-        for h in &mut self.held {
-            if self.t > t0 {
-                h.zoh.step(self.t - t0, &mut self.x[h.states.clone()], &h.u);
+        s.t = if (target - t_new).abs() <= self.tol { target } else { t_new };
+        if s.t > t0 {
+            for h in &mut self.held {
+                h.zoh.step(s.t - t0, &mut s.x[h.states.clone()], &s.held_inputs[h.latched.clone()]);
             }
         }
         if self.grid_step > 0.0 {
-            self.grid.pass(self.t, self.tol);
+            s.grid.pass(s.t, self.tol);
         }
-        if let Some(dense) = &mut self.dense {
-            dense.end(self.t);
+        if let Some(dense) = &mut s.dense {
+            dense.end(s.t);
         }
         let mut clamped = false;
-        for &i in &self.called {
-            let meta = &self.model.slots[i];
-            clamped |= self.model.blocks[i].clamp_states(&mut self.x[meta.states.clone()]);
+        for &i in &self.stateful {
+            clamped |= s.blocks[i].clamp_states(&mut s.x[m.slots[i].states.clone()]);
         }
         let hit = self.mark_hits();
-        let block_event = self.t >= self.next_event - self.tol;
-        self.at_event = block_event;
-        let event_generation = self.next_event_generation;
+        let block_event = self.state.t >= self.state.next_event - self.tol;
+        self.state.at_event = block_event;
+        let event_generation = self.state.next_event_generation;
         if block_event {
-            (self.next_event, self.next_event_generation) = self.earliest_event();
+            (self.state.next_event, self.state.next_event_generation) = self.earliest_event();
         }
         if hit || block_event || clamped {
-            self.integ.invalidate();
+            self.state.integ.invalidate();
         }
         if let Some(at) = breakpoint(hit, block_event, clamped || event.is_some(), event_generation) {
             self.left_limits(at);
         }
-        if !all_finite(&self.x) {
-            return Err(self.blame().state(&self.signals, self.t, &self.x));
+        let s = &mut self.state;
+        if !all_finite(&s.x) {
+            return Err(Blame::of(&self.model).state(&s.signals, s.t, &s.x));
         }
-        self.stalled = if self.t > t0 { 0 } else { self.stalled + 1 };
-        if self.stalled > 1000 {
-            let (i, _) = self
-                .model
+        s.stalled = if s.t > t0 { 0 } else { s.stalled + 1 };
+        if s.stalled > 1000 {
+            let (i, _) = s
                 .blocks
                 .iter()
                 .enumerate()
@@ -476,15 +458,15 @@ impl Simulator {
                 .fold((0, f64::INFINITY), |best, (i, e)| if e < best.1 { (i, e) } else { best });
             return Err(SimError::Stalled { t: t0, block: self.model.meta[i].name.clone() });
         }
-        self.major_steps += 1;
+        s.major_steps += 1;
         Ok(())
     }
 
     /// The next major step's time ([`next_major_time`]), or a host's
     /// landing point before it.
     fn next_major_time(&self) -> f64 {
-        let grid = (self.grid_step > 0.0).then_some(&self.grid);
-        let next = next_major_time(&self.clocks, grid, self.stop, self.next_event, self.tol);
+        let grid = (self.grid_step > 0.0).then_some(&self.state.grid);
+        let next = next_major_time(&self.state.clocks, grid, self.state.stop, self.state.next_event, self.tol);
         // A host's landing point, unless a step of the run's own falls on it.
         if self.pause < next - self.tol { self.pause } else { next }
     }
@@ -507,10 +489,11 @@ impl Simulator {
         loop {
             self.outputs()?;
             // With `output: { every: DT }`, only a major step on the grid is a row.
-            let go_on = match self.dense.as_mut().map_or(Some(self.t), |dense| dense.major_row(self.t)) {
-                Some(t) => sink(t, &self.signals),
-                None => true,
-            };
+            let go_on =
+                match self.state.dense.as_mut().map_or(Some(self.state.t), |dense| dense.major_row(self.state.t)) {
+                    Some(t) => sink(t, &self.state.signals),
+                    None => true,
+                };
             if self.finished() {
                 return Ok(true);
             }

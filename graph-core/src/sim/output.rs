@@ -41,7 +41,7 @@ impl Dense {
         if times == OutputTimes::Steps {
             return None;
         }
-        let (n, n_integrated) = (sim.x.len(), sim.n_integrated);
+        let (n, n_integrated) = (sim.state.x.len(), sim.n_integrated);
         Some(Dense {
             times,
             visits,
@@ -111,33 +111,35 @@ impl Simulator {
     /// Hands `sink` the rows inside the step just taken; returns false when
     /// the sink asked to stop.
     pub(super) fn dense_rows(&mut self, sink: &mut dyn FnMut(f64, &[f64]) -> bool) -> bool {
-        let Some(dense) = &mut self.dense else { return true };
+        let s = &mut self.state;
+        let Some(dense) = &mut s.dense else { return true };
         let mut go_on = true;
         let mut row = 0;
         while let Some(t) = dense.next_row(row) {
             row += 1;
             let n = self.n_integrated;
             let mut sys = Minor {
-                model: &mut self.model,
-                signals: &mut self.signals,
+                model: &self.model,
+                blocks: &mut s.blocks,
+                signals: &mut s.signals,
                 continuous: &dense.visits,
                 at_start: None,
-                stateful: &self.called,
+                stateful: &self.stateful,
                 integrands: &self.integrands,
                 computed_at: &mut self.computed_at,
                 t_end: dense.t_solver,
             };
             if n > 0 {
-                self.integ.interpolate(&mut sys, t, &dense.x_solver, &mut dense.x_row[..n]);
+                s.integ.interpolate(&mut sys, t, &dense.x_solver, &mut dense.x_row[..n]);
             }
             for (h, zoh) in self.held.iter().zip(&mut dense.held) {
                 let states = h.states.clone();
                 dense.x_row[states.clone()].copy_from_slice(&dense.x_start[states.clone()]);
-                zoh.step(t - dense.t0, &mut dense.x_row[states], &h.u);
+                zoh.step(t - dense.t0, &mut dense.x_row[states], &s.held_inputs[h.latched.clone()]);
             }
             sys.t_end = dense.t1;
             sys.outputs(t, &dense.x_row);
-            go_on &= sink(t, &self.signals);
+            go_on &= sink(t, &s.signals);
         }
         go_on
     }
