@@ -18,6 +18,8 @@
 //! }
 //! ```
 
+pub mod conformance;
+
 use ctlgraph_core::Registry;
 use ctlgraph_core::trace::{Trace, simulate};
 use nalgebra::Complex;
