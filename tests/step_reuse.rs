@@ -80,7 +80,7 @@ fn assert_same(what: &str, with: &[(u64, Vec<u64>)], without: &[(u64, Vec<u64>)]
 #[test]
 fn a_time_only_block_runs_once_per_time() {
     use ctlgraph::core::registry::{BlockType, Built};
-    use ctlgraph::core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+    use ctlgraph::core::{Block, Diagnostic, Interface, Io, Params, SampleTime, TimeOnly, Width};
     use std::sync::atomic::{AtomicUsize, Ordering};
     /// y = t, counting its calls.
     #[derive(Clone)]
@@ -90,8 +90,8 @@ fn a_time_only_block_runs_once_per_time() {
             self.0.fetch_add(1, Ordering::Relaxed);
             io.set(0, io.t);
         }
-        fn time_only(&self) -> Option<bool> {
-            Some(self.1)
+        fn time_only(&self) -> Option<TimeOnly> {
+            Some(if self.1 { TimeOnly::JumpsAtEvents } else { TimeOnly::Smooth })
         }
     }
     /// The two blocks' counters: unsided, sided.

@@ -2,7 +2,7 @@
 
 use crate::{ACTIVE, SAMPLE_TIME_CONTINUOUS, Y_SCALAR, param};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, TimeOnly, Width};
 
 pub const TYPES: &[BlockType] = &[
     BlockType {
@@ -124,8 +124,8 @@ impl<F: Fn(&Io) -> f64 + Send + Sync + Clone + 'static> Block for TimeFn<F> {
     fn initialize(&mut self, _x0: &mut [f64]) {
         self.last = Self::NONE;
     }
-    fn time_only(&self) -> Option<bool> {
-        Some(!self.events.is_empty())
+    fn time_only(&self) -> Option<TimeOnly> {
+        Some(if self.events.is_empty() { TimeOnly::Smooth } else { TimeOnly::JumpsAtEvents })
     }
     fn output(&mut self, io: &mut Io) {
         let key = (io.t.to_bits(), !self.events.is_empty() && !io.reached(io.t));
@@ -176,8 +176,8 @@ impl Block for Windowed {
         self.inner.initialize(x0);
     }
     /// The window's edges are events.
-    fn time_only(&self) -> Option<bool> {
-        self.inner.time_only().map(|_| true)
+    fn time_only(&self) -> Option<TimeOnly> {
+        self.inner.time_only().map(|_| TimeOnly::JumpsAtEvents)
     }
     fn output(&mut self, io: &mut Io) {
         if io.reached(self.on) && !io.reached(self.off) {
@@ -235,8 +235,8 @@ fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
         fn output(&mut self, io: &mut Io) {
             io.set_all(0, &self.0);
         }
-        fn time_only(&self) -> Option<bool> {
-            Some(false)
+        fn time_only(&self) -> Option<TimeOnly> {
+            Some(TimeOnly::Smooth)
         }
     }
     let iface = Interface::new(SampleTime::Constant).output("y", Width::Fixed(value.len()));
@@ -303,8 +303,8 @@ impl Block for Pulse {
     fn updates(&self) -> bool {
         false
     }
-    fn time_only(&self) -> Option<bool> {
-        Some(true)
+    fn time_only(&self) -> Option<TimeOnly> {
+        Some(TimeOnly::JumpsAtEvents)
     }
     fn output(&mut self, io: &mut Io) {
         let k = self.index(io.t);

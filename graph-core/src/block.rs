@@ -377,6 +377,17 @@ impl Kernel {
     }
 }
 
+/// How the outputs of a block that is a function of time alone change
+/// ([`Block::time_only`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TimeOnly {
+    /// Continuously: one evaluation per time.
+    Smooth,
+    /// With jumps at the block's events ([`Io::reached`]): a time's left
+    /// limit counts as another time.
+    JumpsAtEvents,
+}
+
 /// A block of the library. See the module docs for when each method runs.
 /// Blocks are `Clone` (derive it): each run works on its own copies of the
 /// compiled model's blocks, kept in its [`crate::RunState`], and a snapshot
@@ -416,14 +427,12 @@ pub trait Block: std::any::Any + Send + Sync + dyn_clone::DynClone {
         None
     }
 
-    /// `Some(sided)` when the outputs are a function of time alone (no
-    /// inputs, states or memory that changes): the scheduler then calls
-    /// `output` once per time and keeps its outputs while it is asked again
-    /// at that time (RK4's two middle stages share one; its last stage's
-    /// is the next major step's). `sided`: the outputs may jump at the
-    /// block's events ([`Io::reached`]), so a time's left limit counts as
-    /// another time.
-    fn time_only(&self) -> Option<bool> {
+    /// `Some` when the outputs are a function of time alone (no inputs,
+    /// states or memory that changes): the scheduler then calls `output`
+    /// once per time and keeps its outputs while it is asked again at that
+    /// time (RK4's two middle stages share one; its last stage's is the
+    /// next major step's). [`TimeOnly`] says whether they jump at events.
+    fn time_only(&self) -> Option<TimeOnly> {
         None
     }
 

@@ -24,7 +24,7 @@ pub mod trace;
 pub mod yaml;
 
 pub use block::Crossing;
-pub use block::{Block, Breakpoint, Interface, Io, Kernel, SampleTime, Width};
+pub use block::{Block, Breakpoint, Interface, Io, Kernel, SampleTime, TimeOnly, Width};
 pub use compile::{Model, compile};
 pub use diag::{Diagnostic, Pos};
 pub use flatten::{FlatGraph, OutputTimes, SimConfig, ZeroCrossing, load, load_str};

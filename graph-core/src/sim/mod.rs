@@ -536,8 +536,9 @@ pub fn not_finite_bits(values: &[f64]) -> u64 {
     values.iter().fold(0, |bad, &v| bad | (v - v).to_bits())
 }
 
+/// Block `slot`'s view of the run: its states, inputs and outputs.
 pub(crate) fn io_for<'a>(
-    meta: &Slot,
+    slot: &Slot,
     t: f64,
     left_limit: bool,
     x: &'a [f64],
@@ -548,10 +549,10 @@ pub(crate) fn io_for<'a>(
     Io::new(
         t,
         left_limit,
-        &x[meta.states.clone()],
+        &x[slot.states.clone()],
         signals,
-        &in_ports[meta.inputs.clone()],
-        &out_ports[meta.outputs.clone()],
+        &in_ports[slot.inputs.clone()],
+        &out_ports[slot.outputs.clone()],
     )
 }
 

@@ -3,7 +3,7 @@
 //! they name, that kernel (no call through a view); and the plain
 //! integrators, whose outputs and derivatives the step loop copies.
 
-use crate::block::Kernel;
+use crate::block::{Kernel, TimeOnly};
 use crate::compile::{Model, Rate};
 
 /// One block's turn in a sweep, laid out once so the step loop reads a
@@ -15,7 +15,7 @@ pub(super) struct Visit {
     /// Run in place of the block's `output`.
     pub(super) kernel: Option<Inline>,
     /// [`crate::block::Block::time_only`].
-    pub(super) time_only: Option<bool>,
+    pub(super) time_only: Option<TimeOnly>,
 }
 
 impl Visit {
@@ -80,8 +80,8 @@ impl ComputedAt {
     /// runs.
     #[inline(always)]
     pub(super) fn must_run(&mut self, v: &Visit, t: f64, left: bool) -> bool {
-        let Some(sided) = v.time_only else { return true };
-        let key = (t.to_bits(), sided && left);
+        let Some(kind) = v.time_only else { return true };
+        let key = (t.to_bits(), kind == TimeOnly::JumpsAtEvents && left);
         let last = &mut self.0[v.block];
         if *last == key {
             return false;
