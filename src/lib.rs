@@ -50,10 +50,23 @@ pub fn compile_file_with(path: &Path, sets: &[(String, String)], registry: &Regi
 /// loop (`phase_margin > 45`), a second copy is compiled and linearised
 /// around its initial operating point to provide them.
 pub fn compile_flat(flat: &FlatGraph, registry: &Registry) -> Result<Model, Diagnostic> {
-    let mut model = ctlgraph_core::compile(flat, registry)?;
+    let model = ctlgraph_core::compile(flat, registry)?;
+    with_loop_figures(model, || ctlgraph_core::compile(flat, registry))
+}
+
+/// Like [`compile_flat`] for a graph loaded with other parameter values
+/// than `base`'s (a sweep's case): on `base`'s structure when the graph
+/// has the same ([`ctlgraph_core::recompile`]), so only its blocks are built.
+pub fn recompile_flat(base: &Model, flat: &FlatGraph, registry: &Registry) -> Result<Model, Diagnostic> {
+    let model = ctlgraph_core::recompile(base, flat, registry)?;
+    with_loop_figures(model, || ctlgraph_core::recompile(base, flat, registry))
+}
+
+/// `model` with the analysed loop's figures, when its checks read them,
+/// from a twin linearised around its initial operating point.
+fn with_loop_figures(mut model: Model, twin: impl FnOnce() -> Result<Model, Diagnostic>) -> Result<Model, Diagnostic> {
     if model.checks.iter().any(|c| c.needs_loop_figures()) {
-        let twin = ctlgraph_core::compile(flat, registry)?;
-        model.loop_figures = Some(analysis::loop_figures(twin)?);
+        model.loop_figures = Some(analysis::loop_figures(twin()?)?);
     }
     Ok(model)
 }

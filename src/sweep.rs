@@ -10,8 +10,8 @@
 use crate::record::Number;
 use crate::suite::{Failure, run_checks};
 use ctlgraph_blocks::noise::Stream;
-use ctlgraph_core::Diagnostic;
 use ctlgraph_core::checks::CheckResult;
+use ctlgraph_core::{Diagnostic, ParsedGraph};
 use rayon::prelude::*;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -205,8 +205,20 @@ pub fn run(
     stop: &AtomicBool,
     done: &(dyn Fn() + Sync),
 ) -> Result<Vec<Row>, Failure> {
-    // Validate once, so a broken file is one error, not a table of them.
-    compile(text, file, names, &Case { index: 0, values: Vec::new(), seed: None })?;
+    // Parsed and compiled once: a broken file is one error, not a table of
+    // them, and each case is compiled on this model's structure.
+    let parsed = ParsedGraph::parse(text, file.display().to_string().into())?;
+    let registry = crate::registry();
+    let base = crate::compile_flat(&parsed.flatten(&[])?, &registry)?;
+    let compile = |case: &Case| -> Result<ctlgraph_core::Model, Failure> {
+        let sets: Vec<(String, String)> =
+            names.iter().zip(&case.values).map(|(n, v)| (n.clone(), format!("{v:e}"))).collect();
+        let mut flat = parsed.flatten(&sets)?;
+        if let Some(seed) = case.seed {
+            flat.sim.seed = seed;
+        }
+        Ok(crate::recompile_flat(&base, &flat, &registry)?)
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs.max(1))
         .build()
@@ -219,7 +231,7 @@ pub fn run(
                     return None;
                 }
                 let start = std::time::Instant::now();
-                let outcome = compile(text, file, names, case).and_then(|model| run_checks(model, None));
+                let outcome = compile(case).and_then(|model| run_checks(model, None));
                 let wall = start.elapsed().as_secs_f64();
                 let (result, trace) = match outcome {
                     Ok((trace, checks)) => {
@@ -245,16 +257,6 @@ fn write_trace(dir: &Path, index: usize, trace: &crate::record::Trace) -> Result
     let path = dir.join(format!("case-{index:06}.csv"));
     crate::record::write_atomic(&path, crate::record::trace_csv(trace).as_bytes())
         .map_err(|e| format!("{}: {e}", path.display()))
-}
-
-fn compile(text: &str, file: &Path, names: &[String], case: &Case) -> Result<ctlgraph_core::Model, Failure> {
-    let sets: Vec<(String, String)> =
-        names.iter().zip(&case.values).map(|(n, v)| (n.clone(), format!("{v:e}"))).collect();
-    let mut flat = ctlgraph_core::load_str(text, file.display().to_string().into(), &sets)?;
-    if let Some(seed) = case.seed {
-        flat.sim.seed = seed;
-    }
-    Ok(crate::compile_flat(&flat, &crate::registry())?)
 }
 
 /// The results table: `case`, the parameters, `seed`, each check's

@@ -115,7 +115,30 @@ pub fn load(path: &Path, overrides: &[(String, String)]) -> Result<FlatGraph, Di
 /// Like [`load`] for text already in memory; `file` names it in messages
 /// and locates relative paths.
 pub fn load_str(text: &str, file: Arc<str>, overrides: &[(String, String)]) -> Result<FlatGraph, Diagnostic> {
-    let graph = GraphFile::parse(text, file.clone())?;
+    ParsedGraph::parse(text, file)?.flatten(overrides)
+}
+
+/// A graph file parsed once, to be expanded with other parameter values
+/// (a sweep's cases) without reading and parsing it again.
+pub struct ParsedGraph {
+    graph: GraphFile,
+    file: Arc<str>,
+}
+
+impl ParsedGraph {
+    /// Parses `text`; `file` names it in messages and locates relative paths.
+    pub fn parse(text: &str, file: Arc<str>) -> Result<Self, Diagnostic> {
+        Ok(ParsedGraph { graph: GraphFile::parse(text, file.clone())?, file })
+    }
+
+    /// Evaluates its parameters with `overrides` (`--set NAME=VALUE`
+    /// pairs) and expands it, as [`load_str`] does.
+    pub fn flatten(&self, overrides: &[(String, String)]) -> Result<FlatGraph, Diagnostic> {
+        flatten(&self.graph, self.file.clone(), overrides)
+    }
+}
+
+fn flatten(graph: &GraphFile, file: Arc<str>, overrides: &[(String, String)]) -> Result<FlatGraph, Diagnostic> {
     let known: Vec<&str> = graph.parameters.iter().map(|(k, _)| k.name.as_str()).collect();
     for (name, _) in overrides {
         if !known.contains(&name.as_str()) {
@@ -154,7 +177,7 @@ pub fn load_str(text: &str, file: Arc<str>, overrides: &[(String, String)]) -> R
     };
     out.scopes = graph.scopes.iter().map(|s| s.evaluate(&number)).collect::<Result<_, _>>()?;
     let mut includes = Includes::new(canonical(Path::new(&*file)));
-    expand(&graph, "", scope, dir, &mut out, &mut includes)?;
+    expand(graph, "", scope, dir, &mut out, &mut includes)?;
     out.records = graph.record.clone();
     Ok(out)
 }

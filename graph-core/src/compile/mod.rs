@@ -6,6 +6,7 @@
 mod advice;
 mod between;
 mod external;
+mod reuse;
 mod schedule;
 mod wiring;
 
@@ -14,6 +15,7 @@ use crate::diag::{Diagnostic, Pos};
 use crate::flatten::{FlatBlock, FlatGraph, INPORT, MAX_STEPS, SimConfig};
 use crate::registry::Registry;
 pub(crate) use between::Between;
+pub use reuse::{recompile, reuse_structure};
 use schedule::{resolve_rates, sort};
 use std::collections::HashMap;
 use std::ops::Range;
@@ -124,6 +126,9 @@ pub struct Model {
     pub loop_dead_time: Option<(f64, usize)>,
     /// What `check` and `run` warn about (module `advice`).
     pub warnings: Vec<String>,
+    /// What another loaded graph must share to be compiled on this one's
+    /// structure ([`recompile`]).
+    pub(crate) structure: reuse::Structure,
 }
 
 struct Node<'g> {
@@ -279,6 +284,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         external_outputs,
         loop_dead_time: None,
         warnings: Vec::new(),
+        structure: reuse::Structure::of(g, &nodes, &order),
     };
     between::plan(&mut model, &piecewise);
     model.loop_dead_time = advice::loop_dead_time(&model);

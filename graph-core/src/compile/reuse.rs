@@ -1,0 +1,141 @@
+//! Compiling a graph again with other parameter values (a sweep's cases)
+//! without redoing what its structure decides. When the loaded graph has
+//! the same blocks, wires and records as a compiled model, and every block
+//! builds with the same interface (ports, widths, feedthrough, sample
+//! time) and state count, the execution order, port layout, rates, clocks
+//! and columns are the model's: only the blocks are built anew, and what
+//! depends on their values is redone — the minor-step plan (`Between`),
+//! the checks, the advice, the refusals of too many events or hits.
+//! Anything else compiles whole, so the result is always what
+//! [`super::compile`] gives.
+
+use super::between::{self, Between};
+use super::wiring::instantiate;
+use super::{Model, Node, Rate, advice, compile, headers, refuse_too_many_steps};
+use crate::diag::Diagnostic;
+use crate::flatten::FlatGraph;
+use crate::registry::Registry;
+use std::collections::hash_map::DefaultHasher;
+use std::hash::{Hash, Hasher};
+
+/// What a model keeps of its structure to recognise it in another loaded graph.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Structure {
+    /// Hash of the blocks' names and types, the wires, the records.
+    shape: u64,
+    /// Per loaded block: hash of its built interface.
+    signatures: Vec<u64>,
+    /// Execution position → loaded block.
+    order: Vec<usize>,
+    /// Per loaded block: the common width it was given.
+    widths: Vec<Option<usize>>,
+}
+
+impl Structure {
+    pub(super) fn of(g: &FlatGraph, nodes: &[Node], order: &[usize]) -> Self {
+        Structure {
+            shape: shape(g),
+            signatures: nodes.iter().map(signature).collect(),
+            order: order.to_vec(),
+            widths: nodes.iter().map(|n| n.width).collect(),
+        }
+    }
+}
+
+fn shape(g: &FlatGraph) -> u64 {
+    let mut h = DefaultHasher::new();
+    for b in &g.blocks {
+        (&b.path, &b.spec.type_name).hash(&mut h);
+    }
+    let mut subsystems: Vec<_> = g.subsystems.iter().collect();
+    subsystems.sort_by_key(|(path, _)| path.as_str());
+    format!("{:?}{:?}{:?}{:?}", g.wires, g.records, g.analysis, subsystems).hash(&mut h);
+    g.record_every.hash(&mut h);
+    h.finish()
+}
+
+fn signature(node: &Node) -> u64 {
+    let mut h = DefaultHasher::new();
+    format!("{:?}", node.iface).hash(&mut h);
+    node.is_virtual.hash(&mut h);
+    h.finish()
+}
+
+/// Compiles `g`, reusing `base`'s structure where `g` has the same.
+pub fn recompile(base: &Model, g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
+    match reuse_structure(base, g, reg)? {
+        Some(model) => Ok(model),
+        None => compile(g, reg),
+    }
+}
+
+/// `g` compiled on `base`'s structure, or `None` when its structure differs.
+pub fn reuse_structure(base: &Model, g: &FlatGraph, reg: &Registry) -> Result<Option<Model>, Diagnostic> {
+    let s = &base.structure;
+    if shape(g) != s.shape {
+        return Ok(None);
+    }
+    let mut nodes = instantiate(g, reg)?;
+    if nodes.len() != s.signatures.len() || nodes.iter().zip(&s.signatures).any(|(n, &sig)| signature(n) != sig) {
+        return Ok(None);
+    }
+    let mut blocks = Vec::with_capacity(s.order.len());
+    for (k, &i) in s.order.iter().enumerate() {
+        let node = &mut nodes[i];
+        let Some(mut block) = node.block.take() else { return Ok(None) };
+        if node.iface.has_common_width() {
+            block.set_width(s.widths[i].unwrap_or(1)).map_err(|m| {
+                Diagnostic::at(
+                    &node.flat.spec.pos,
+                    format!("block `{}` ({}): {m}", node.flat.path, node.flat.spec.type_name),
+                )
+            })?;
+        }
+        if block.num_states() != base.meta[k].states.len() {
+            return Ok(None);
+        }
+        let spacing = block.min_event_spacing();
+        refuse_too_many_steps(node, g.sim.stop, spacing, |n| format!("events {spacing:e} s apart give {n:e} steps"))?;
+        if let Rate::Discrete(c) = base.meta[k].rate {
+            let period = base.clocks[c].0;
+            refuse_too_many_steps(node, g.sim.stop, period, |n| {
+                format!("a sample time of {period:e} s gives {n:e} hits")
+            })?;
+        }
+        blocks.push(block);
+    }
+    let checks = crate::checks::compile(&g.checks, &headers(&base.columns), &g.parameters, g.analysis.is_some())?;
+    let mut model = Model {
+        blocks,
+        meta: base.meta.iter().map(|m| super::BlockMeta { exact_zoh: false, ..m.clone() }).collect(),
+        slots: base.slots.clone(),
+        in_ports: base.in_ports.clone(),
+        out_ports: base.out_ports.clone(),
+        signal_len: base.signal_len,
+        n_states: base.n_states,
+        clocks: base.clocks.clone(),
+        columns: base.columns.clone(),
+        record_every: base.record_every,
+        checks,
+        scopes: g.scopes.clone(),
+        edges: base.edges.clone(),
+        sim: g.sim.clone(),
+        parameters: g.parameters.clone(),
+        name: g.name.clone(),
+        file: g.file.clone(),
+        between: Between::default(),
+        analysis: g.analysis.clone(),
+        loop_figures: None,
+        subsystem_ports: base.subsystem_ports.clone(),
+        external_inputs: base.external_inputs.clone(),
+        external_outputs: base.external_outputs.clone(),
+        loop_dead_time: None,
+        warnings: Vec::new(),
+        structure: base.structure.clone(),
+    };
+    let piecewise: Vec<bool> = model.meta.iter().map(|m| m.piecewise_constant).collect();
+    between::plan(&mut model, &piecewise);
+    model.loop_dead_time = advice::loop_dead_time(&model);
+    model.warnings = advice::warnings(&model);
+    Ok(Some(model))
+}
