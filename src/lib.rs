@@ -9,6 +9,7 @@
 //! ```
 
 pub mod analysis;
+pub mod cache;
 pub mod diagram;
 pub mod dot;
 pub mod html;

@@ -44,3 +44,26 @@ fn a_value_that_changes_the_structure_compiles_whole() {
     let full = ctlgraph_core::compile(&rate, &registry).unwrap();
     assert_eq!(bits(recompile(&base, &rate, &registry).unwrap(), 0.2), bits(full, 0.2));
 }
+
+#[test]
+fn the_graph_cache_gives_what_a_fresh_compile_gives_and_sees_an_edited_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("loop.yaml");
+    let graph = |den: &str| {
+        format!(
+            "parameters: {{ k: 2 }}\nsimulation: {{ stop: 1 }}\nblocks:\n  r: {{ type: step }}\n  e: {{ type: sum, signs: \"+-\" }}\n  \
+             c: {{ type: gain, k: k }}\n  p: {{ type: transfer_function, num: [1], den: {den} }}\n\
+             wires: [r -> e.u1, p -> e.u2, e -> c, c -> p]\nrecord: [y: p]\n"
+        )
+    };
+    std::fs::write(&path, graph("[1, 1]")).unwrap();
+    let cache = ctlgraph::cache::GraphCache::new();
+    for (k, den) in [("2", "[1, 1]"), ("3", "[1, 1]"), ("3", "[1, 2, 1]")] {
+        std::fs::write(&path, graph(den)).unwrap();
+        let sets = [("k".to_string(), k.to_string())];
+        let cached = cache.compile(&path, &sets, None).unwrap();
+        let fresh = ctlgraph::compile_file_seeded(&path, &sets, None).unwrap();
+        assert_eq!(cached.n_states, fresh.n_states, "den {den}");
+        assert_eq!(bits(cached, 1.0), bits(fresh, 1.0), "k = {k}, den {den}");
+    }
+}

@@ -206,7 +206,7 @@ fn run(
     seed: Option<u64>,
 ) -> PyResult<RunResult> {
     let sets = overrides(set)?;
-    let model = py.detach(|| ctlgraph::compile_file_seeded(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
+    let model = py.detach(|| GRAPHS.compile(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
     let (trace, checks, counts, wall) = py.detach(|| simulate(model, stop)).map_err(SimulationError::new_err)?;
     let Trace { headers, columns, .. } = trace;
     let columns = columns.into_iter().map(|c| PyArray1::from_vec(py, c).unbind()).collect();
@@ -218,6 +218,9 @@ fn run(
     stats.set_item("wall_seconds", wall)?;
     Ok(RunResult { names: headers, columns, checks, stats: stats.unbind() })
 }
+
+/// Graphs run before: a run of one with other values compiles on its structure.
+static GRAPHS: ctlgraph::cache::GraphCache = ctlgraph::cache::GraphCache::new();
 
 /// Validates the graph file `path` and returns its blocks in execution
 /// order, as dicts (name, type, sample_time). Raises GraphError.
@@ -383,7 +386,7 @@ impl LoadedModel {
 #[pyo3(signature = (path, set = None, seed = None))]
 fn load(py: Python<'_>, path: PathBuf, set: Option<&Bound<'_, PyDict>>, seed: Option<u64>) -> PyResult<LoadedModel> {
     let sets = overrides(set)?;
-    let model = py.detach(|| ctlgraph::compile_file_seeded(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
+    let model = py.detach(|| GRAPHS.compile(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
     Ok(LoadedModel { sim: Mutex::new(Simulator::new(model, None)) })
 }
 
