@@ -1,5 +1,8 @@
 //! Sweep throughput: the tutorial PID loop over a 20 × 20 grid of kp and
-//! kd (400 cases), on one and on two worker threads, side by side.
+//! kd (400 cases), on one and on two worker threads, side by side; and the
+//! cases on one thread compiled each from its text (what a sweep did
+//! before cases were compiled on the structure) beside the sweep's way
+//! (parsed once, each case's blocks built on the first's structure).
 //!
 //!     cargo bench --bench sweep
 
@@ -29,6 +32,36 @@ fn bench(c: &mut Criterion) {
             b.iter(|| sweep::run(&text, file, &names, &cases, jobs, &keep, &stop, &|| {}).expect("runs").len())
         });
     }
+    group.finish();
+
+    let mut group = c.benchmark_group("pid_loop_400_cases_compiled");
+    group.sample_size(20);
+    let sets = |case: &sweep::Case| -> Vec<(String, String)> {
+        names.iter().zip(&case.values).map(|(n, v)| (n.clone(), format!("{v:e}"))).collect()
+    };
+    let run = |model| ctlgraph::suite::run_checks(model, None).expect("runs").1.len();
+    group.bench_function("each_from_its_text", |b| {
+        b.iter(|| {
+            let registry = ctlgraph::registry();
+            let compile = |case| {
+                let flat = ctlgraph_core::load_str(&text, "pid_loop.yaml".into(), &sets(case)).expect("loads");
+                ctlgraph::compile_flat(&flat, &registry).expect("compiles")
+            };
+            cases.iter().map(|case| run(compile(case))).sum::<usize>()
+        })
+    });
+    group.bench_function("on_the_structure", |b| {
+        b.iter(|| {
+            let registry = ctlgraph::registry();
+            let parsed = ctlgraph_core::ParsedGraph::parse(&text, "pid_loop.yaml".into()).expect("parses");
+            let base = ctlgraph::compile_flat(&parsed.flatten(&[]).expect("loads"), &registry).expect("compiles");
+            let compile = |case| {
+                let flat = parsed.flatten(&sets(case)).expect("loads");
+                ctlgraph::recompile_flat(&base, &flat, &registry).expect("compiles")
+            };
+            cases.iter().map(|case| run(compile(case))).sum::<usize>()
+        })
+    });
     group.finish();
 }
 

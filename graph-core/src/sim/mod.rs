@@ -371,7 +371,10 @@ impl Simulator {
         let target = self.next_major_time();
         let (m, s) = (&*self.model, &mut self.state);
         for h in &self.held {
-            s.held_inputs[h.latched.clone()].copy_from_slice(&s.signals[h.input.clone()]);
+            // Element by element: one or two values, where copy_from_slice calls memcpy.
+            for (u, &v) in s.held_inputs[h.latched.clone()].iter_mut().zip(&s.signals[h.input.clone()]) {
+                *u = v;
+            }
         }
         let t0 = s.t;
         if let Some(dense) = &mut s.dense {
