@@ -21,6 +21,9 @@
 //! `output` must be idempotent within a major step: it may run twice (after
 //! a [`Block::major_step`] reset) and must not advance state.
 
+mod io;
+pub use io::Io;
+
 use ctlgraph_solver::StateSpace;
 use std::fmt;
 
@@ -178,146 +181,6 @@ impl Interface {
 pub struct Port {
     pub offset: usize,
     pub width: usize,
-}
-
-/// A block's window on the simulation: time, its continuous states, its
-/// inputs and outputs. Built by the simulator for each call; holds only
-/// borrowed slices.
-pub struct Io<'a> {
-    /// Simulation time.
-    pub t: f64,
-    /// This block's continuous states (empty for blocks without any).
-    pub x: &'a [f64],
-    left_limit: bool,
-    major: bool,
-    frozen: bool,
-    signals: &'a mut [f64],
-    inputs: &'a [Port],
-    outputs: &'a [Port],
-}
-
-impl<'a> Io<'a> {
-    pub fn new(
-        t: f64,
-        left_limit: bool,
-        x: &'a [f64],
-        signals: &'a mut [f64],
-        inputs: &'a [Port],
-        outputs: &'a [Port],
-    ) -> Self {
-        Io { t, x, left_limit, major: true, frozen: false, signals, inputs, outputs }
-    }
-
-    /// Marks the call as a solver stage (minor step), with the block's
-    /// modes frozen when its zero crossings are watched.
-    pub fn in_minor_step(mut self, frozen: bool) -> Self {
-        self.major = false;
-        self.frozen = frozen;
-        self
-    }
-
-    /// Whether this is a major step (the pass whose outputs are recorded),
-    /// not a solver stage.
-    #[inline]
-    pub fn is_major(&self) -> bool {
-        self.major
-    }
-
-    /// Whether `t` is seen as a left limit: the solver's last stage at the
-    /// end of a step, or a [`Block::left_limit`] call.
-    #[inline]
-    pub fn is_left_limit(&self) -> bool {
-        self.left_limit
-    }
-
-    /// Whether a block with modes may switch mode now: at major steps, and
-    /// at every evaluation when zero-crossing detection is off (the block
-    /// then acts as a plain function). False in the solver's minor steps
-    /// under detection: the mode chosen at the last major step holds.
-    #[inline]
-    pub fn may_switch(&self) -> bool {
-        !self.frozen
-    }
-
-    /// All elements of input `port`.
-    #[inline]
-    pub fn input(&self, port: usize) -> &[f64] {
-        let p = self.inputs[port];
-        &self.signals[p.offset..p.offset + p.width]
-    }
-
-    /// The first (for scalars: the only) element of input `port`.
-    #[inline]
-    pub fn u(&self, port: usize) -> f64 {
-        self.signals[self.inputs[port].offset]
-    }
-
-    /// Element `k` of input `port`, broadcasting a scalar input.
-    #[inline]
-    pub fn u_at(&self, port: usize, k: usize) -> f64 {
-        let p = self.inputs[port];
-        self.signals[p.offset + if p.width == 1 { 0 } else { k }]
-    }
-
-    pub fn num_inputs(&self) -> usize {
-        self.inputs.len()
-    }
-
-    #[inline]
-    pub fn input_width(&self, port: usize) -> usize {
-        self.inputs[port].width
-    }
-
-    /// All elements of output `port`, to write.
-    #[inline]
-    pub fn output(&mut self, port: usize) -> &mut [f64] {
-        let p = self.outputs[port];
-        &mut self.signals[p.offset..p.offset + p.width]
-    }
-
-    /// Sets the first (for scalars: the only) element of output `port`.
-    #[inline]
-    pub fn set(&mut self, port: usize, value: f64) {
-        self.signals[self.outputs[port].offset] = value;
-    }
-
-    /// Writes all elements of output `port` (an element loop: for the few
-    /// values of a port it is cheaper than `copy_from_slice`'s memmove).
-    #[inline]
-    pub fn set_all(&mut self, port: usize, values: &[f64]) {
-        for (o, &v) in self.output(port).iter_mut().zip(values) {
-            *o = v;
-        }
-    }
-
-    /// Sets element `k` of output `port`.
-    #[inline]
-    pub fn set_at(&mut self, port: usize, k: usize, value: f64) {
-        self.signals[self.outputs[port].offset + k] = value;
-    }
-
-    pub fn num_outputs(&self) -> usize {
-        self.outputs.len()
-    }
-
-    /// The width of output `port`. Like every part of the view's
-    /// structure (port widths, `x.len()`), a constant in a generated step
-    /// once the block's method is inlined there: a block that branches on
-    /// these rather than on its own fields has the branch removed.
-    #[inline]
-    pub fn output_width(&self, port: usize) -> usize {
-        self.outputs[port].width
-    }
-
-    /// Whether time has reached `t_event`. At the end of an integration
-    /// interval that lands on an event, the solver's last stage sees the
-    /// left limit (not yet reached); the major step at the event sees it
-    /// reached. Sources with discontinuities (step, pulse) use this so that
-    /// the jump falls exactly between two steps.
-    #[inline]
-    pub fn reached(&self, t_event: f64) -> bool {
-        self.t > t_event || (self.t == t_event && !self.left_limit)
-    }
 }
 
 /// A major step at which signals may be discontinuous: a sample hit, a
