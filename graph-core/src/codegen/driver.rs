@@ -40,6 +40,9 @@ pub trait GeneratedStep: Sized {
     /// limit, handed to the blocks keeping history ([`crate::Block::left_limit`]).
     fn left_limits(&mut self, t: f64, x: &[f64], at: Breakpoint);
     fn diagnose(&self, block: usize) -> Option<String>;
+    /// Block `block`'s next event after `t` ([`crate::Block::next_event`]),
+    /// to name the block that holds time when a run stalls.
+    fn block_event(&self, block: usize, t: f64) -> f64;
 }
 
 /// The kernel of the model's block `index`, for generated code reading
@@ -114,6 +117,8 @@ pub struct Compiled<G: GeneratedStep> {
     events_may_change: bool,
     n_integrated: usize,
     major_steps: u64,
+    /// Major steps in a row at which time did not advance ([`sim::count_stall`]).
+    stalled: u32,
     /// For naming a block in an error.
     meta: Vec<BlockMeta>,
     in_ports: Vec<Port>,
@@ -166,6 +171,7 @@ impl<G: GeneratedStep> Compiled<G> {
             events_may_change: false,
             n_integrated: model.between.n_integrated,
             major_steps: 0,
+            stalled: 0,
             meta: model.meta.clone(),
             in_ports: model.in_ports.clone(),
             out_ports: model.out_ports.clone(),
@@ -181,6 +187,7 @@ impl<G: GeneratedStep> Compiled<G> {
         self.all_finite = true;
         self.at_event = true;
         self.major_steps = 0;
+        self.stalled = 0;
         self.timing.grid.set_tick(1);
         self.step.signals_mut().iter_mut().for_each(|s| *s = 0.0);
         self.step.initialize(&mut self.x);
@@ -311,9 +318,8 @@ impl<G: GeneratedStep> Compiled<G> {
             self.events_may_change = true;
         }
         self.check_states()?;
-        if self.t <= t0 {
-            return Err(SimError::Stalled { t: t0, block: "?".into() });
-        }
+        let step = &self.step;
+        sim::count_stall(&mut self.stalled, t0, self.t, &self.meta, |i| step.block_event(i, t0))?;
         self.major_steps += 1;
         Ok(())
     }

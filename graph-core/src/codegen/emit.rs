@@ -398,7 +398,12 @@ impl<'m> Gen<'m> {
         for v in &self.visits {
             let _ = writeln!(out, "            {} => self.b{}.diagnose(),", v.index, v.index);
         }
-        out.push_str("            _ => None,\n        }\n    }\n");
+        out.push_str("            _ => None,\n        }\n    }\n\n");
+        out.push_str("    fn block_event(&self, block: usize, t: f64) -> f64 {\n        match block {\n");
+        for v in &self.visits {
+            let _ = writeln!(out, "            {} => self.b{}.next_event(t),", v.index, v.index);
+        }
+        out.push_str("            _ => f64::INFINITY,\n        }\n    }\n");
     }
 }
 

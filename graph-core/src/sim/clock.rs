@@ -3,8 +3,9 @@
 //! steps), shared by the simulator and a generated step
 //! ([`crate::codegen::Compiled`]).
 
+use super::SimError;
 use crate::block::Breakpoint;
-use crate::compile::Model;
+use crate::compile::{BlockMeta, Model};
 use ctlgraph_solver::Method;
 
 /// The times k·h of a grid with step h. When h is the reciprocal of a
@@ -233,4 +234,72 @@ pub(crate) fn breakpoint(hit: bool, block_event: bool, located: bool, event_gene
         generation: if located || !block_event { 0 } else { event_generation },
         sample_hit_only: !(located || block_event),
     })
+}
+
+/// Major steps in a row at which time may stand still (events at one
+/// instant passing one another on) before a run stops.
+pub(crate) const MAX_STALLED_STEPS: u32 = 1000;
+
+/// The stall rule both drivers follow: counts the major steps in a row
+/// that left time at `t0`; past [`MAX_STALLED_STEPS`] the run stops naming
+/// the block whose event (the earliest after `t0`, `event_of` a block)
+/// holds time there — one asking for steps closer than floating point can
+/// tell apart.
+pub(crate) fn count_stall(
+    stalled: &mut u32,
+    t0: f64,
+    t: f64,
+    meta: &[BlockMeta],
+    event_of: impl Fn(usize) -> f64,
+) -> Result<(), SimError> {
+    *stalled = if t > t0 { 0 } else { *stalled + 1 };
+    if *stalled <= MAX_STALLED_STEPS {
+        return Ok(());
+    }
+    let (i, _) = (0..meta.len())
+        .map(|i| (i, event_of(i)))
+        .fold((0, f64::INFINITY), |best, (i, e)| if e < best.1 { (i, e) } else { best });
+    Err(SimError::Stalled { t: t0, block: meta.get(i).map_or_else(|| "?".into(), |m| m.name.clone()) })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::block::SampleTime;
+    use crate::compile::Rate;
+
+    fn meta(name: &str) -> BlockMeta {
+        BlockMeta {
+            name: name.into(),
+            type_name: "pulse".into(),
+            pos: crate::diag::Pos::new("g.yaml".into(), 1, 1),
+            rate: Rate::Continuous,
+            sample_time: SampleTime::Continuous,
+            inputs: 0..0,
+            outputs: 0..0,
+            states: 0..0,
+            input_names: Vec::new(),
+            output_names: Vec::new(),
+            exact_zoh: false,
+            piecewise_constant: false,
+        }
+    }
+
+    #[test]
+    fn a_stall_stops_the_run_after_the_limit_naming_the_block_whose_event_holds_time() {
+        let blocks = [meta("slow"), meta("stuck"), meta("idle")];
+        let events = [2.0, 1.0, f64::INFINITY];
+        let mut stalled = 0;
+        for _ in 0..MAX_STALLED_STEPS {
+            assert!(count_stall(&mut stalled, 1.0, 1.0, &blocks, |i| events[i]).is_ok());
+        }
+        // Time moving on starts the count again.
+        assert!(count_stall(&mut stalled, 1.0, 1.5, &blocks, |i| events[i]).is_ok());
+        assert_eq!(stalled, 0);
+        for _ in 0..MAX_STALLED_STEPS {
+            count_stall(&mut stalled, 1.0, 1.0, &blocks, |i| events[i]).unwrap();
+        }
+        let error = count_stall(&mut stalled, 1.0, 1.0, &blocks, |i| events[i]).unwrap_err();
+        assert_eq!(error, SimError::Stalled { t: 1.0, block: "stuck".into() });
+    }
 }

@@ -22,7 +22,7 @@ mod state;
 pub(crate) mod visit;
 pub(crate) use blame::Blame;
 pub use clock::earlier;
-pub(crate) use clock::{Clock, OnGrid, Timing, breakpoint, mark_hits, next_major_time};
+pub(crate) use clock::{Clock, OnGrid, Timing, breakpoint, count_stall, mark_hits, next_major_time};
 pub use error::SimError;
 pub use host::Snapshot;
 pub(crate) use state::RunBlock;
@@ -189,6 +189,7 @@ impl Simulator {
         self.state.first = true;
         self.outputs_current = false;
         self.state.major_steps = 0;
+        self.state.stalled = 0;
         self.state.grid.set_tick(1);
         self.state.signals.iter_mut().for_each(|s| *s = 0.0);
         self.computed_at.forget();
@@ -451,16 +452,8 @@ impl Simulator {
         if !all_finite(&s.x) {
             return Err(Blame::of(&self.model).state(&s.signals, s.t, &s.x));
         }
-        s.stalled = if s.t > t0 { 0 } else { s.stalled + 1 };
-        if s.stalled > 1000 {
-            let (i, _) = s
-                .blocks
-                .iter()
-                .enumerate()
-                .map(|(i, b)| (i, b.next_event(t0)))
-                .fold((0, f64::INFINITY), |best, (i, e)| if e < best.1 { (i, e) } else { best });
-            return Err(SimError::Stalled { t: t0, block: self.model.meta[i].name.clone() });
-        }
+        let blocks = &s.blocks;
+        count_stall(&mut s.stalled, t0, s.t, &self.model.meta, |i| blocks[i].next_event(t0))?;
         s.major_steps += 1;
         Ok(())
     }
