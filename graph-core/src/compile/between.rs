@@ -36,7 +36,7 @@ pub(crate) struct Between {
 /// blocks' after. `exact_lti` enables holding (fixed-step methods only: an
 /// adaptive method's steps, and so the recorded samples, would change if
 /// the states it controls its error on were taken from it).
-pub(super) fn plan(model: &mut Model, piecewise: &[bool]) {
+pub(super) fn plan(model: &mut Model) {
     let n = model.blocks.len();
     let mut drivers = vec![Vec::new(); n];
     for e in &model.edges {
@@ -47,6 +47,7 @@ pub(super) fn plan(model: &mut Model, piecewise: &[bool]) {
     let (continuous, has_states) = (|i: usize| is_continuous[i], |i: usize| is_stateful[i]);
     // A block is piecewise constant once all its drivers are.
     let start: Vec<bool> = (0..n).map(|i| !continuous(i)).collect();
+    let piecewise: Vec<bool> = model.meta.iter().map(|m| m.piecewise_constant).collect();
     let constant = closure(start, |i, set| piecewise[i] && !has_states(i) && drivers[i].iter().all(|&d| set[d]));
     // Event-only: continuous, piecewise constant, and fed only by constant
     // or event-only blocks (a source without inputs changes at its events).

@@ -159,13 +159,11 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let (rates, clocks) = resolve_rates(&nodes, &drivers, &order);
     for (i, node) in nodes.iter().enumerate() {
         let spacing = node.block.as_ref().map_or(f64::INFINITY, |b| b.min_event_spacing());
-        refuse_too_many_steps(node, g.sim.stop, spacing, |n| format!("events {spacing:e} s apart give {n:e} steps"))?;
-        if let Some(Rate::Discrete(c)) = rates.get(&i) {
-            let period = clocks[*c].0;
-            refuse_too_many_steps(node, g.sim.stop, period, |n| {
-                format!("a sample time of {period:e} s gives {n:e} hits")
-            })?;
-        }
+        let period = match rates.get(&i) {
+            Some(Rate::Discrete(c)) => Some(clocks[*c].0),
+            _ => None,
+        };
+        refuse_too_many_steps(node, g.sim.stop, spacing, period)?;
     }
 
     // Lay out outputs, then point every input at its driver's output.
@@ -184,7 +182,6 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let mut meta = Vec::with_capacity(order.len());
     let (mut in_ports, mut out_ports) = (Vec::new(), Vec::new());
     let mut n_states = 0;
-    let mut piecewise = Vec::with_capacity(order.len());
     // Node index → place in the execution order.
     let mut position = vec![0; nodes.len()];
     for (k, &i) in order.iter().enumerate() {
@@ -219,7 +216,6 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
             exact_zoh: false,
             piecewise_constant: node.iface.piecewise_constant,
         });
-        piecewise.push(node.iface.piecewise_constant);
         n_states += ns;
         model_blocks.push(block);
     }
@@ -286,9 +282,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         warnings: Vec::new(),
         structure: reuse::Structure::of(g, &nodes, &order),
     };
-    between::plan(&mut model, &piecewise);
-    model.loop_dead_time = advice::loop_dead_time(&model);
-    model.warnings = advice::warnings(&model);
+    plan_and_advise(&mut model);
     if let Some(sel) = &model.analysis {
         for name in [&sel.input, &sel.output, &sel.open].into_iter().flatten() {
             if let Err(d) = model.signal_offset(name) {
@@ -469,21 +463,31 @@ pub(crate) fn signal_owner<'m>(meta: &'m [BlockMeta], out_ports: &[Port], offset
     })
 }
 
-/// Refuses a block whose events or sample hits, `interval` seconds apart,
-/// would need more than [`MAX_STEPS`] to reach the stop time (the run would
-/// never end in practice); `what` names them, given their count.
-fn refuse_too_many_steps(
-    node: &Node,
-    stop: f64,
-    interval: f64,
-    what: impl FnOnce(f64) -> String,
-) -> Result<(), Diagnostic> {
-    let steps = stop / interval;
-    if steps <= MAX_STEPS {
-        return Ok(());
+/// Refuses a block whose events (`event_spacing` apart) or sample hits
+/// (`period` apart) would need more than [`MAX_STEPS`] to reach the stop
+/// time (the run would never end in practice).
+fn refuse_too_many_steps(node: &Node, stop: f64, event_spacing: f64, period: Option<f64>) -> Result<(), Diagnostic> {
+    let refuse = |interval: f64, what: &dyn Fn(f64) -> String| {
+        let steps = stop / interval;
+        if steps <= MAX_STEPS {
+            return Ok(());
+        }
+        Err(Diagnostic::at(
+            &node.flat.spec.pos,
+            format!("block `{}`: {} before the stop time {stop} s (limit {MAX_STEPS:e})", node.flat.path, what(steps)),
+        ))
+    };
+    refuse(event_spacing, &|n| format!("events {event_spacing:e} s apart give {n:e} steps"))?;
+    match period {
+        Some(period) => refuse(period, &|n| format!("a sample time of {period:e} s gives {n:e} hits")),
+        None => Ok(()),
     }
-    Err(Diagnostic::at(
-        &node.flat.spec.pos,
-        format!("block `{}`: {} before the stop time {stop} s (limit {MAX_STEPS:e})", node.flat.path, what(steps)),
-    ))
+}
+
+/// The plan between major steps and the advice, from the model's blocks
+/// as they are built (after a full compile, or new blocks on a structure).
+fn plan_and_advise(model: &mut Model) {
+    between::plan(model);
+    model.loop_dead_time = advice::loop_dead_time(model);
+    model.warnings = advice::warnings(model);
 }

@@ -9,9 +9,10 @@
 //! Anything else compiles whole, so the result is always what
 //! [`super::compile`] gives.
 
-use super::between::{self, Between};
+use super::between::Between;
 use super::wiring::instantiate;
-use super::{Model, Node, Rate, advice, compile, headers, refuse_too_many_steps};
+use super::wiring::set_common_width;
+use super::{Model, Node, Rate, compile, headers, plan_and_advise, refuse_too_many_steps};
 use crate::diag::Diagnostic;
 use crate::flatten::FlatGraph;
 use crate::registry::Registry;
@@ -84,24 +85,16 @@ pub fn reuse_structure(base: &Model, g: &FlatGraph, reg: &Registry) -> Result<Op
         let node = &mut nodes[i];
         let Some(mut block) = node.block.take() else { return Ok(None) };
         if node.iface.has_common_width() {
-            block.set_width(s.widths[i].unwrap_or(1)).map_err(|m| {
-                Diagnostic::at(
-                    &node.flat.spec.pos,
-                    format!("block `{}` ({}): {m}", node.flat.path, node.flat.spec.type_name),
-                )
-            })?;
+            set_common_width(node.flat, &mut *block, s.widths[i].unwrap_or(1))?;
         }
         if block.num_states() != base.meta[k].states.len() {
             return Ok(None);
         }
-        let spacing = block.min_event_spacing();
-        refuse_too_many_steps(node, g.sim.stop, spacing, |n| format!("events {spacing:e} s apart give {n:e} steps"))?;
-        if let Rate::Discrete(c) = base.meta[k].rate {
-            let period = base.clocks[c].0;
-            refuse_too_many_steps(node, g.sim.stop, period, |n| {
-                format!("a sample time of {period:e} s gives {n:e} hits")
-            })?;
-        }
+        let period = match base.meta[k].rate {
+            Rate::Discrete(c) => Some(base.clocks[c].0),
+            _ => None,
+        };
+        refuse_too_many_steps(node, g.sim.stop, block.min_event_spacing(), period)?;
         blocks.push(block);
     }
     let checks = crate::checks::compile(&g.checks, &headers(&base.columns), &g.parameters, g.analysis.is_some())?;
@@ -133,9 +126,6 @@ pub fn reuse_structure(base: &Model, g: &FlatGraph, reg: &Registry) -> Result<Op
         warnings: Vec::new(),
         structure: base.structure.clone(),
     };
-    let piecewise: Vec<bool> = model.meta.iter().map(|m| m.piecewise_constant).collect();
-    between::plan(&mut model, &piecewise);
-    model.loop_dead_time = advice::loop_dead_time(&model);
-    model.warnings = advice::warnings(&model);
+    plan_and_advise(&mut model);
     Ok(Some(model))
 }

@@ -4,9 +4,9 @@
 
 use super::external::ExternalInput;
 use super::{Column, Driver, Node, resolved};
-use crate::block::{Interface, Port, SampleTime, Width};
+use crate::block::{Block, Interface, Port, SampleTime, Width};
 use crate::diag::{Diagnostic, Pos};
-use crate::flatten::{FlatGraph, INPORT, OUTPORT, resolve_sub_port};
+use crate::flatten::{FlatBlock, FlatGraph, INPORT, OUTPORT, resolve_sub_port};
 use crate::params::Params;
 use crate::registry::Registry;
 use crate::spec::Endpoint;
@@ -211,15 +211,17 @@ pub(super) fn resolve_widths(nodes: &mut [Node], drivers: &[Vec<Driver>]) -> Res
     for node in nodes.iter_mut().filter(|n| !n.is_virtual && n.iface.has_common_width()) {
         let w = *node.width.get_or_insert(1);
         if let Some(block) = node.block.as_mut() {
-            block.set_width(w).map_err(|m| {
-                Diagnostic::at(
-                    &node.flat.spec.pos,
-                    format!("block `{}` ({}): {m}", node.flat.path, node.flat.spec.type_name),
-                )
-            })?;
+            set_common_width(node.flat, &mut **block, w)?;
         }
     }
     Ok(())
+}
+
+/// Gives `flat`'s built block its resolved common width; a refusal names the block.
+pub(super) fn set_common_width(flat: &FlatBlock, block: &mut dyn Block, width: usize) -> Result<(), Diagnostic> {
+    block
+        .set_width(width)
+        .map_err(|m| Diagnostic::at(&flat.spec.pos, format!("block `{}` ({}): {m}", flat.path, flat.spec.type_name)))
 }
 
 /// The columns of the output: the `record:` list, or by default every
