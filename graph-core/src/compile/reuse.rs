@@ -20,7 +20,7 @@ use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
 
 /// What a model keeps of its structure to recognise it in another loaded graph.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(crate) struct Structure {
     /// Hash of the blocks' names and types, the wires, the records.
     shape: u64,
