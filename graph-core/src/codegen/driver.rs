@@ -4,8 +4,8 @@
 
 use crate::block::{Breakpoint, Kernel, Port};
 use crate::compile::{BlockMeta, Model};
-use crate::sim::{self, Blame, OnGrid, RunStats, SimError, Timing};
-use ctlgraph_solver::{Integrator, OdeSystem, Zoh, ZohSingleInput};
+use crate::sim::{self, Blame, Clockwork, RunStats, SimError, Sweeps, driver};
+use ctlgraph_solver::{OdeSystem, Zoh, ZohSingleInput};
 
 /// What `ctlgraph codegen` writes for a graph: its sweeps unrolled over
 /// the graph's blocks. Implemented by generated code only; the methods are
@@ -95,30 +95,15 @@ pub fn zeros<const N: usize>() -> Box<[f64; N]> {
 }
 
 /// A run of a generated step `G`: like [`crate::Simulator`] for the
-/// graphs [`super::generate`] accepts, with the same results.
+/// graphs [`super::generate`] accepts, with the same results. Its time
+/// keeping is the driver's ([`crate::sim::Sweeps`]); the generated step
+/// provides the sweeps.
 pub struct Compiled<G: GeneratedStep> {
     step: G,
     x: Vec<f64>,
-    integ: Integrator,
-    timing: Timing,
-    /// The clocks counted in grid steps, when they all fall on the grid.
-    on_grid: Option<OnGrid>,
-    hit: Vec<bool>,
-    t: f64,
-    stop: f64,
-    first: bool,
+    clockwork: Clockwork,
     /// Whether every signal was finite after the last output sweep.
     all_finite: bool,
-    at_event: bool,
-    next_event: f64,
-    next_event_generation: u32,
-    /// Left limits were handed out at the last major step: the updates may
-    /// schedule events (see the simulator's field of that name).
-    events_may_change: bool,
-    n_integrated: usize,
-    major_steps: u64,
-    /// Major steps in a row at which time did not advance ([`sim::count_stall`]).
-    stalled: u32,
     /// For naming a block in an error.
     meta: Vec<BlockMeta>,
     in_ports: Vec<Port>,
@@ -152,26 +137,11 @@ impl<G: GeneratedStep> Compiled<G> {
             }
             None => return Err(format!("`{}`: {}", model.file, super::refusals(model).join("; "))),
         }
-        let stop = stop.unwrap_or(model.sim.stop);
-        let timing = Timing::new(model, stop);
         let mut run = Compiled {
             step: G::from_model(model)?,
             x: vec![0.0; model.n_states],
-            integ: Integrator::new(timing.method, model.between.n_integrated),
-            hit: vec![false; timing.clocks.len()],
-            on_grid: OnGrid::new(&timing),
-            timing,
-            t: 0.0,
-            stop,
-            first: true,
+            clockwork: Clockwork::new(model, stop.unwrap_or(model.sim.stop)),
             all_finite: true,
-            at_event: true,
-            next_event: f64::INFINITY,
-            next_event_generation: 0,
-            events_may_change: false,
-            n_integrated: model.between.n_integrated,
-            major_steps: 0,
-            stalled: 0,
             meta: model.meta.clone(),
             in_ports: model.in_ports.clone(),
             out_ports: model.out_ports.clone(),
@@ -182,25 +152,7 @@ impl<G: GeneratedStep> Compiled<G> {
 
     /// Back to t = 0 with initial states (blocks re-initialised).
     pub fn reset(&mut self) {
-        self.t = 0.0;
-        self.first = true;
-        self.all_finite = true;
-        self.at_event = true;
-        self.major_steps = 0;
-        self.stalled = 0;
-        self.timing.grid.set_tick(1);
-        self.step.signals_mut().iter_mut().for_each(|s| *s = 0.0);
-        self.step.initialize(&mut self.x);
-        self.timing.clocks.iter_mut().for_each(|c| c.set_tick(0));
-        match &mut self.on_grid {
-            Some(on_grid) => on_grid.reset(&mut self.hit),
-            None => {
-                self.mark_hits();
-            }
-        }
-        (self.next_event, self.next_event_generation) = self.step.next_event(self.t);
-        self.events_may_change = false;
-        self.integ.reset();
+        driver::reset(self);
     }
 
     pub fn signals(&self) -> &[f64] {
@@ -212,153 +164,34 @@ impl<G: GeneratedStep> Compiled<G> {
     }
 
     pub fn time(&self) -> f64 {
-        self.t
+        self.clockwork.t
     }
 
     pub fn stats(&self) -> RunStats {
-        RunStats { major_steps: self.major_steps, solver: self.integ.stats(), events: 0 }
+        RunStats { major_steps: self.clockwork.major_steps, solver: self.clockwork.integ.stats(), events: 0 }
     }
 
     /// Whether the run counts its discrete rates in grid steps (every
     /// period 1/n_c s dividing the grid's step of 1/n s, no offsets: see
     /// `sim::clock::OnGrid`) rather than keeping a time per clock.
     pub fn clocks_on_grid(&self) -> bool {
-        self.on_grid.is_some()
+        self.clockwork.on_grid.is_some()
     }
 
     /// Whether the run has reached its stop time.
     pub fn finished(&self) -> bool {
-        self.t >= self.stop - self.timing.tol && !self.first
-    }
-
-    /// The clocks due at `self.t`, found by their times (when they are
-    /// not all on the grid).
-    fn mark_hits(&mut self) -> bool {
-        let any = sim::mark_hits(&mut self.timing.clocks, self.t, self.timing.tol);
-        for (h, c) in self.hit.iter_mut().zip(&self.timing.clocks) {
-            *h = c.hit;
-        }
-        any
+        self.clockwork.finished()
     }
 
     /// Step (1) of a major step: outputs in execution order, then a check
     /// that every signal is finite.
-    ///
-    /// The step checks what it writes; signals it did not write this time
-    /// were checked when they were, unless a step found one not finite
-    /// (then the whole buffer is checked again at every step).
     pub fn outputs(&mut self) -> Result<(), SimError> {
-        let all = self.first || self.at_event;
-        let wrote_finite = self.step.outputs(self.t, &self.x, self.first, all, &self.hit);
-        self.first = false;
-        if !(wrote_finite && self.all_finite) {
-            self.all_finite = sim::all_finite(self.step.signals());
-            if !self.all_finite {
-                let step = &self.step;
-                return Err(self.blame().signal(step.signals(), self.t, |i| step.diagnose(i)));
-            }
-        }
-        Ok(())
-    }
-
-    /// What names a block in this run's errors.
-    fn blame(&self) -> Blame<'_> {
-        Blame { meta: &self.meta, in_ports: &self.in_ports, out_ports: &self.out_ports }
+        driver::outputs(self)
     }
 
     /// Steps (3) and (4): updates, then integration to the next major step.
     pub fn advance(&mut self) -> Result<(), SimError> {
-        self.step.updates(self.t, &self.x, &self.hit);
-        if std::mem::take(&mut self.events_may_change) {
-            (self.next_event, self.next_event_generation) = self.step.next_event(self.t);
-        }
-        self.step.hold_inputs();
-        if self.on_grid.is_some() && self.n_integrated == 0 && !G::KEEPS_HISTORY {
-            let next = self.timing.grid.next;
-            if next <= self.stop && self.next_event > next + self.timing.tol {
-                return self.advance_to_grid_point(next);
-            }
-        }
-        let target = self.next_major_time();
-        let t0 = self.t;
-        let x = &mut self.x[..self.n_integrated];
-        let t_new = if x.is_empty() {
-            target.min(t0 + self.timing.method.max_step())
-        } else {
-            let mut stage = Stage { step: &mut self.step, t_end: target };
-            match self.integ.advance(&mut stage, t0, target, x) {
-                Ok(t) => t,
-                Err(error) => return Err(self.blame().solver(self.step.signals(), t0, error)),
-            }
-        };
-        let tol = self.timing.tol;
-        self.t = if (target - t_new).abs() <= tol { target } else { t_new };
-        if self.t > t0 {
-            self.step.step_held(self.t - t0, &mut self.x);
-        }
-        let on_grid = self.timing.grid_step > 0.0 && self.timing.grid.pass(self.t, tol);
-        let clamped = self.step.clamp_states(&mut self.x[..self.n_integrated]);
-        let hit = match &mut self.on_grid {
-            Some(clocks) => clocks.mark_hits(on_grid, &mut self.hit),
-            None => self.mark_hits(),
-        };
-        let block_event = self.t >= self.next_event - tol;
-        self.at_event = block_event;
-        let event_generation = self.next_event_generation;
-        if block_event {
-            (self.next_event, self.next_event_generation) = self.step.next_event(self.t);
-        }
-        if hit || block_event || clamped {
-            self.integ.invalidate();
-        }
-        if G::KEEPS_HISTORY
-            && let Some(at) = sim::breakpoint(hit, block_event, clamped, event_generation)
-        {
-            self.step.left_limits(self.t, &self.x[..self.n_integrated], at);
-            self.events_may_change = true;
-        }
-        self.check_states()?;
-        let step = &self.step;
-        sim::count_stall(&mut self.stalled, t0, self.t, &self.meta, |i| step.block_event(i, t0))?;
-        self.major_steps += 1;
-        Ok(())
-    }
-
-    /// [`Self::advance`]'s steps after the updates, where they are known to
-    /// end at the grid's next point `next`: nothing is integrated (held LTI
-    /// blocks are stepped exactly), no block keeps history (so no left
-    /// limits are due at hits), the clocks are on the grid, and neither
-    /// the stop time nor a block event comes first. The general path then
-    /// takes `next` as the major step's time (the integrator's candidate
-    /// t0 + h differs from it by rounding only), marks the grid and the
-    /// clocks passed, and sees no event; here those same results are set
-    /// without computing and comparing the candidates.
-    fn advance_to_grid_point(&mut self, next: f64) -> Result<(), SimError> {
-        let t0 = self.t;
-        self.t = next;
-        self.step.step_held(next - t0, &mut self.x);
-        self.timing.grid.pass_one();
-        if let Some(clocks) = &mut self.on_grid {
-            clocks.mark_hits(true, &mut self.hit);
-        }
-        self.at_event = false;
-        self.check_states()?;
-        self.major_steps += 1;
-        Ok(())
-    }
-
-    fn check_states(&self) -> Result<(), SimError> {
-        if sim::all_finite(&self.x) { Ok(()) } else { Err(self.blame().state(self.step.signals(), self.t, &self.x)) }
-    }
-
-    /// The next major step's time, as the simulator decides it.
-    /// With the clocks on the grid, their next hits are grid points no
-    /// earlier than the grid's next: the grid alone decides.
-    fn next_major_time(&self) -> f64 {
-        let timing = &self.timing;
-        let grid = (timing.grid_step > 0.0).then_some(&timing.grid);
-        let clocks = if self.on_grid.is_some() { &[][..] } else { &timing.clocks[..] };
-        sim::next_major_time(clocks, grid, self.stop, self.next_event, timing.tol)
+        driver::advance(self)
     }
 
     /// Runs to the stop time, handing the signals to `sink` at every major
@@ -366,13 +199,112 @@ impl<G: GeneratedStep> Compiled<G> {
     /// The sink is a type parameter, not a `dyn` call: it inlines into the
     /// loop, which then keeps its values in registers across it.
     pub fn run(&mut self, mut sink: impl FnMut(f64, &[f64])) -> Result<RunStats, SimError> {
-        loop {
-            self.outputs()?;
-            sink(self.t, self.step.signals());
-            if self.finished() {
-                return Ok(self.stats());
+        driver::run_while(self, |t, signals| {
+            sink(t, signals);
+            true
+        })?;
+        Ok(self.stats())
+    }
+
+    /// What names a block in this run's errors.
+    fn blame(&self) -> Blame<'_> {
+        Blame { meta: &self.meta, in_ports: &self.in_ports, out_ports: &self.out_ports }
+    }
+}
+
+/// The generated step's sweeps, for the driver.
+impl<G: GeneratedStep> Sweeps for Compiled<G> {
+    #[inline(always)]
+    fn clockwork(&self) -> &Clockwork {
+        &self.clockwork
+    }
+
+    #[inline(always)]
+    fn clockwork_mut(&mut self) -> &mut Clockwork {
+        &mut self.clockwork
+    }
+
+    fn signals(&self) -> &[f64] {
+        self.step.signals()
+    }
+
+    fn states(&self) -> &[f64] {
+        &self.x
+    }
+
+    fn initialize(&mut self) {
+        self.all_finite = true;
+        self.step.signals_mut().iter_mut().for_each(|s| *s = 0.0);
+        self.step.initialize(&mut self.x);
+    }
+
+    /// The step checks what it writes; signals it did not write this time
+    /// were checked when they were, unless a step found one not finite
+    /// (then the whole buffer is checked again at every step).
+    fn output_sweep(&mut self) -> Result<(), SimError> {
+        let c = &self.clockwork;
+        let all = c.first || c.at_event;
+        let wrote_finite = self.step.outputs(c.t, &self.x, c.first, all, &c.hit);
+        if !(wrote_finite && self.all_finite) {
+            self.all_finite = sim::all_finite(self.step.signals());
+            if !self.all_finite {
+                let step = &self.step;
+                return Err(self.blame().signal(step.signals(), c.t, |i| step.diagnose(i)));
             }
-            self.advance()?;
         }
+        Ok(())
+    }
+
+    fn update_sweep(&mut self) {
+        self.step.updates(self.clockwork.t, &self.x, &self.clockwork.hit);
+    }
+
+    fn earliest_event(&self) -> (f64, u32) {
+        self.step.next_event(self.clockwork.t)
+    }
+
+    fn block_event(&self, block: usize, t: f64) -> f64 {
+        self.step.block_event(block, t)
+    }
+
+    fn latch_held(&mut self) {
+        self.step.hold_inputs();
+    }
+
+    fn step_held(&mut self, dt: f64) {
+        self.step.step_held(dt, &mut self.x);
+    }
+
+    fn integrate(&mut self, t0: f64, target: f64) -> Result<f64, SimError> {
+        let mut stage = Stage { step: &mut self.step, t_end: target };
+        let x = &mut self.x[..self.clockwork.n_integrated];
+        match self.clockwork.integ.advance(&mut stage, t0, target, x) {
+            Ok(t) => Ok(t),
+            Err(error) => Err(self.blame().solver(self.step.signals(), t0, error)),
+        }
+    }
+
+    fn clamp_states(&mut self) -> bool {
+        self.step.clamp_states(&mut self.x[..self.clockwork.n_integrated])
+    }
+
+    fn keeps_history(&self) -> bool {
+        G::KEEPS_HISTORY
+    }
+
+    fn left_limits(&mut self, at: Breakpoint) {
+        self.step.left_limits(self.clockwork.t, &self.x[..self.clockwork.n_integrated], at);
+    }
+
+    fn plain_grid_steps(&self) -> bool {
+        !G::KEEPS_HISTORY
+    }
+
+    fn names(&self) -> &[BlockMeta] {
+        &self.meta
+    }
+
+    fn blame_states(&self) -> SimError {
+        self.blame().state(self.step.signals(), self.clockwork.t, &self.x)
     }
 }

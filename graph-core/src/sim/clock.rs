@@ -1,12 +1,10 @@
 //! How a run keeps time: the fixed-step grid and the discrete rates'
 //! clocks, counted in whole ticks (never by adding up floating-point
-//! steps), shared by the simulator and a generated step
-//! ([`crate::codegen::Compiled`]).
+//! steps), kept by the driver (`driver.rs`) for both back-ends.
 
 use super::SimError;
 use crate::block::Breakpoint;
-use crate::compile::{BlockMeta, Model};
-use ctlgraph_solver::Method;
+use crate::compile::BlockMeta;
 
 /// The times k·h of a grid with step h. When h is the reciprocal of a
 /// whole number n (0.01, 1e-4, 0.5), k/n is used: division is correctly
@@ -42,12 +40,11 @@ pub(crate) struct Clock {
     /// recomputed: the step loop asks for it several times per step).
     tick: u64,
     pub(crate) next: f64,
-    pub(crate) hit: bool,
 }
 
 impl Clock {
-    fn new(step: f64, offset: f64) -> Self {
-        Clock { grid: Grid::new(step), offset, tick: 0, next: offset, hit: false }
+    pub(super) fn new(step: f64, offset: f64) -> Self {
+        Clock { grid: Grid::new(step), offset, tick: 0, next: offset }
     }
 
     pub(crate) fn set_tick(&mut self, tick: u64) {
@@ -73,49 +70,13 @@ impl Clock {
     }
 }
 
-/// How a run keeps time, as the simulator and a generated step
-/// ([`crate::codegen::Compiled`]) both keep it.
-#[derive(Clone, Debug)]
-pub(crate) struct Timing {
-    pub(crate) method: Method,
-    /// The fixed-step grid's step (0 for the adaptive methods) and its clock.
-    pub(crate) grid_step: f64,
-    pub(crate) grid: Clock,
-    pub(crate) clocks: Vec<Clock>,
-    /// Times closer than this are the same major step.
-    pub(crate) tol: f64,
-}
-
-impl Timing {
-    pub(crate) fn new(model: &Model, stop: f64) -> Self {
-        let method = match model.sim.method {
-            // With a delay on a loop, a step longer than it would take the
-            // delay's output from past the newest sample.
-            m if model.sim.default_max_step => {
-                let delay = model.loop_dead_time.map_or(f64::INFINITY, |(d, _)| d);
-                m.with_max_step(m.default_max_step(stop).min(delay))
-            }
-            m => m,
-        };
-        let grid_step = if method.is_adaptive() { 0.0 } else { method.max_step() };
-        let clocks: Vec<Clock> = model.clocks.iter().map(|&(period, offset)| Clock::new(period, offset)).collect();
-        let smallest = clocks
-            .iter()
-            .map(|c| c.grid.step)
-            .chain([stop, method.max_step()])
-            .filter(|&p| p > 0.0)
-            .fold(f64::INFINITY, f64::min);
-        Timing { method, grid_step, grid: Clock::new(grid_step, 0.0), clocks, tol: 1e-9 * smallest }
-    }
-}
-
-/// Takes the clocks whose next hit is (within `tol`) at `t`; returns
-/// whether any was.
-pub(crate) fn mark_hits(clocks: &mut [Clock], t: f64, tol: f64) -> bool {
+/// Takes the clocks whose next hit is (within `tol`) at `t`, marking them
+/// in `hit`; returns whether any was.
+pub(crate) fn mark_hits(clocks: &mut [Clock], t: f64, tol: f64, hit: &mut [bool]) -> bool {
     let mut any = false;
-    for c in clocks {
-        c.hit = c.next <= t + tol;
-        if c.hit {
+    for (c, hit) in clocks.iter_mut().zip(hit) {
+        *hit = c.next <= t + tol;
+        if *hit {
             c.set_tick(c.tick + 1);
             any = true;
         }
@@ -162,10 +123,9 @@ struct Countdown {
 
 impl OnGrid {
     /// `None` when some clock is not on the grid (or there is no grid).
-    pub(crate) fn new(timing: &Timing) -> Option<Self> {
-        let n = timing.grid.grid.per_unit.filter(|_| timing.grid_step > 0.0)?;
-        let clocks = timing
-            .clocks
+    pub(crate) fn new(grid_step: f64, grid: &Clock, clocks: &[Clock]) -> Option<Self> {
+        let n = grid.grid.per_unit.filter(|_| grid_step > 0.0)?;
+        let clocks = clocks
             .iter()
             .map(|c| match c.grid.per_unit {
                 Some(n_c) if c.offset == 0.0 && n % n_c == 0.0 => {
@@ -245,6 +205,7 @@ pub(crate) const MAX_STALLED_STEPS: u32 = 1000;
 /// the block whose event (the earliest after `t0`, `event_of` a block)
 /// holds time there — one asking for steps closer than floating point can
 /// tell apart.
+#[inline(always)]
 pub(crate) fn count_stall(
     stalled: &mut u32,
     t0: f64,
@@ -253,13 +214,16 @@ pub(crate) fn count_stall(
     event_of: impl Fn(usize) -> f64,
 ) -> Result<(), SimError> {
     *stalled = if t > t0 { 0 } else { *stalled + 1 };
-    if *stalled <= MAX_STALLED_STEPS {
-        return Ok(());
-    }
+    if *stalled <= MAX_STALLED_STEPS { Ok(()) } else { Err(stall(t0, meta, event_of)) }
+}
+
+/// The error of a run that stalled at `t0`.
+#[cold]
+fn stall(t0: f64, meta: &[BlockMeta], event_of: impl Fn(usize) -> f64) -> SimError {
     let (i, _) = (0..meta.len())
         .map(|i| (i, event_of(i)))
         .fold((0, f64::INFINITY), |best, (i, e)| if e < best.1 { (i, e) } else { best });
-    Err(SimError::Stalled { t: t0, block: meta.get(i).map_or_else(|| "?".into(), |m| m.name.clone()) })
+    SimError::Stalled { t: t0, block: meta.get(i).map_or_else(|| "?".into(), |m| m.name.clone()) }
 }
 
 #[cfg(test)]

@@ -54,7 +54,7 @@ impl Simulator {
         if let Some(bad) = value.iter().find(|v| !v.is_finite()) {
             return Err(Diagnostic::plain(format!("input `{name}`: {bad} is not a finite number")));
         }
-        if !self.state.first && !self.state.inputs_changed {
+        if !self.state.clockwork.first && !self.state.inputs_changed {
             // The outputs at this time, with the input before, are its left limit.
             self.hand_left_limits(crate::block::Breakpoint { generation: 0, sample_hit_only: false });
         }
@@ -69,28 +69,29 @@ impl Simulator {
     /// at `t`). `t` may lie beyond the graph's stop time, which then moves
     /// to `t`; a time before the present is an error.
     pub fn advance_to(&mut self, t: f64) -> Result<(), SimError> {
-        if !t.is_finite() || t < self.state.t - self.tol {
-            return Err(SimError::Host(format!("cannot advance to t = {t} from t = {}", self.state.t)));
+        let c = &mut self.state.clockwork;
+        if !t.is_finite() || t < c.t - c.tol {
+            return Err(SimError::Host(format!("cannot advance to t = {t} from t = {}", c.t)));
         }
-        self.state.stop = self.state.stop.max(t);
+        c.stop = c.stop.max(t);
         self.refresh()?;
-        self.pause = t;
+        self.state.clockwork.pause = t;
         let result = self.advance_to_pause(t);
-        self.pause = f64::INFINITY;
+        self.state.clockwork.pause = f64::INFINITY;
         result
     }
 
     /// Computes the outputs at the present time if nothing has yet, or an
     /// input changed since.
     fn refresh(&mut self) -> Result<(), SimError> {
-        if self.state.first || self.state.inputs_changed {
+        if self.state.clockwork.first || self.state.inputs_changed {
             self.outputs()?;
         }
         Ok(())
     }
 
     fn advance_to_pause(&mut self, t: f64) -> Result<(), SimError> {
-        while self.state.t < t - self.tol {
+        while self.state.clockwork.t < t - self.state.clockwork.tol {
             self.advance()?;
             self.outputs()?;
         }

@@ -41,7 +41,7 @@ impl Dense {
         if times == OutputTimes::Steps {
             return None;
         }
-        let (n, n_integrated) = (sim.state.x.len(), sim.n_integrated);
+        let (n, n_integrated) = (sim.state.x.len(), sim.state.clockwork.n_integrated);
         Some(Dense {
             times,
             visits,
@@ -110,14 +110,19 @@ impl Dense {
 impl Simulator {
     /// Hands `sink` the rows inside the step just taken; returns false when
     /// the sink asked to stop.
+    #[inline(always)]
     pub(super) fn dense_rows(&mut self, sink: &mut dyn FnMut(f64, &[f64]) -> bool) -> bool {
+        if self.state.dense.is_none() { true } else { self.rows_of_dense_output(sink) }
+    }
+
+    fn rows_of_dense_output(&mut self, sink: &mut dyn FnMut(f64, &[f64]) -> bool) -> bool {
         let s = &mut self.state;
         let Some(dense) = &mut s.dense else { return true };
         let mut go_on = true;
         let mut row = 0;
         while let Some(t) = dense.next_row(row) {
             row += 1;
-            let n = self.n_integrated;
+            let n = s.clockwork.n_integrated;
             let mut sys = Minor {
                 model: &self.model,
                 blocks: &mut s.blocks,
@@ -130,7 +135,7 @@ impl Simulator {
                 t_end: dense.t_solver,
             };
             if n > 0 {
-                s.integ.interpolate(&mut sys, t, &dense.x_solver, &mut dense.x_row[..n]);
+                s.clockwork.integ.interpolate(&mut sys, t, &dense.x_solver, &mut dense.x_row[..n]);
             }
             for (h, zoh) in self.held.iter().zip(&mut dense.held) {
                 let states = h.states.clone();
