@@ -9,6 +9,7 @@
 //! changes only at major steps, so the solver's minor steps see it fixed.
 //! A block derives `Clone`, so that a snapshot of a run copies its memory.
 
+use ctlgraph::core::ParamDefault::Number;
 use ctlgraph::core::registry::{BlockType, Built, ParamDoc, PortDoc};
 use ctlgraph::core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 
@@ -40,9 +41,10 @@ impl Block for Relay {
 }
 
 fn build_relay(p: &mut Params) -> Result<Built, Diagnostic> {
-    let on = p.number_or("on", 0.1)?;
-    let off = p.number_where("off", Some(-0.1), |v| v <= on, "at most `on`")?;
-    let (high, low) = (p.number_or("high", 1.0)?, p.number_or("low", -1.0)?);
+    // Defaults come from the parameter table below (written once).
+    let on = p.number("on")?;
+    let off = p.number_where("off", None, |v| v <= on, "at most `on`")?;
+    let (high, low) = (p.number("high")?, p.number("low")?);
     // Output depends only on the stored state: no direct feedthrough, so a
     // relay closes a loop without an algebraic loop.
     let iface = Interface::new(SampleTime::Continuous).input("u", Width::Fixed(1), false).output("y", Width::Fixed(1));
@@ -57,10 +59,10 @@ const RELAY: BlockType = BlockType {
     inputs: &[PortDoc { name: "u", doc: "scalar" }],
     outputs: &[PortDoc { name: "y", doc: "scalar" }],
     params: &[
-        ParamDoc { name: "on", default: Some("0.1"), doc: "switch-on threshold" },
-        ParamDoc { name: "off", default: Some("-0.1"), doc: "switch-off threshold, <= on" },
-        ParamDoc { name: "high", default: Some("1"), doc: "output when on" },
-        ParamDoc { name: "low", default: Some("-1"), doc: "output when off" },
+        ParamDoc::new("on", Number(0.1), "switch-on threshold"),
+        ParamDoc::new("off", Number(-0.1), "switch-off threshold, <= on"),
+        ParamDoc::new("high", Number(1.0), "output when on"),
+        ParamDoc::new("low", Number(-1.0), "output when off"),
     ],
     build: build_relay,
 };

@@ -437,8 +437,11 @@ fn blocks(ty: Option<&str>) -> Result<(), Failure> {
         println!("  (none)");
     }
     for p in t.params {
-        let default = p.default.map_or("required".to_string(), |d| format!("default {d}"));
-        println!("  {:<14} {:<18} {}", p.name, default, p.doc);
+        let default = match p.default {
+            ctlgraph_core::ParamDefault::Required => "required".to_string(),
+            value => format!("default {value}"),
+        };
+        println!("  {:<14} {:<18} {}", p.name, default, ctlgraph::reference::doc_text(p));
     }
     Ok(())
 }

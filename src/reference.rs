@@ -1,7 +1,7 @@
 //! The block reference as Markdown (`ctlgraph blocks --markdown`, committed
 //! as docs/blocks.md and compared by a test, so it cannot go stale).
 
-use ctlgraph_core::Registry;
+use ctlgraph_core::{ParamDefault, ParamDoc, Registry};
 use std::fmt::Write;
 
 /// Every block type by category: summary, equations and semantics, ports,
@@ -38,12 +38,21 @@ pub fn markdown(reg: &Registry) -> String {
                 out.push_str("Parameters: none.\n");
                 continue;
             }
-            out.push_str("| parameter | default | |\n|---|---|---|\n");
+            out.push_str("| parameter | default | unit | |\n|---|---|---|---|\n");
             for p in t.params {
-                let default = p.default.map_or("required".to_string(), |d| format!("`{}`", cell(d)));
-                let _ = writeln!(out, "| `{}` | {default} | {} |", p.name, cell(p.doc));
+                let default = match p.default {
+                    ParamDefault::Required => "required".to_string(),
+                    ParamDefault::Described(words) => cell(words),
+                    value => format!("`{}`", cell(&value.to_string())),
+                };
+                let _ = writeln!(out, "| `{}` | {default} | {} | {} |", p.name, cell(p.unit), cell(p.doc));
             }
         }
     }
     out
+}
+
+/// A parameter's doc as `ctlgraph blocks TYPE` prints it: with its unit.
+pub fn doc_text(p: &ParamDoc) -> String {
+    if p.unit.is_empty() { p.doc.to_string() } else { format!("{} [{}]", p.doc, p.unit) }
 }

@@ -3,9 +3,9 @@
 //! feedback (LSEF). Composed into LADRC by `graphs/lib/ladrc.yaml`.
 
 use crate::math::sign;
-use crate::param;
+use crate::table::*;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
 pub const TYPES: &[BlockType] = &[
     BlockType {
@@ -32,11 +32,12 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[PortDoc { name: "r", doc: "reference (scalar)" }],
         outputs: &[PortDoc { name: "r1", doc: "tracked reference" }, PortDoc { name: "r2", doc: "its derivative" }],
         params: &[
-            param("delta", None, "speed factor δ > 0: largest |dr2/dt| [units/s²]"),
-            param("h0", Some("2·sample_time"), "filter factor h0 > 0 [s]; >= 2·sample_time avoids overshoot"),
-            param("form", Some("fst"), "fst (Han's, c = x1 + h0·x2) | paper (eq. 7 as printed, c = x1 + h·x2) | fhan"),
-            param("c_step", Some("h0"), "the step in c = x1 + c_step·x2 of fst (paper: h); > 0 [s]"),
-            param("initial", Some("0"), "r1(0)"),
+            param("delta", Required, "speed factor δ > 0: largest |dr2/dt|").unit("units/s²"),
+            param("h0", Described("2·sample_time"), "filter factor h0 > 0; >= 2·sample_time avoids overshoot")
+                .unit("s"),
+            param("form", Word("fst"), "fst (Han's, c = x1 + h0·x2) | paper (eq. 7 as printed, c = x1 + h·x2) | fhan"),
+            param("c_step", Described("h0"), "the step in c = x1 + c_step·x2 of fst (paper: h); > 0").unit("s"),
+            param("initial", Number(0.0), "r1(0)"),
             crate::SAMPLE_TIME_REQUIRED,
         ],
         build: build_td,
@@ -59,12 +60,12 @@ pub const TYPES: &[BlockType] = &[
         ],
         outputs: &[PortDoc { name: "z", doc: "estimates [y, y', …, f], width n+1" }],
         params: &[
-            param("order", Some("2"), "plant order n (1, 2 or 3)"),
-            param("omega", None, "observer bandwidth ω [rad/s] (or give `beta`)"),
-            param("beta", None, "explicit gains [β1 … β_{n+1}] instead of ω"),
-            param("b0", None, "input gain estimate b0"),
-            param("initial", Some("0"), "z(0): a number or n+1 numbers"),
-            param("sample_time", Some("0"), "0 continuous, h > 0 discrete (forward Euler)"),
+            param("order", Number(2.0), "plant order n (1, 2 or 3)"),
+            param("omega", Required, "observer bandwidth ω (or give `beta`)").unit("rad/s"),
+            param("beta", Required, "explicit gains [β1 … β_{n+1}] instead of ω"),
+            param("b0", Required, "input gain estimate b0"),
+            param("initial", Number(0.0), "z(0): a number or n+1 numbers"),
+            param("sample_time", Number(0.0), "0 continuous, h > 0 discrete (forward Euler)"),
         ],
         build: build_leso,
     },
@@ -86,12 +87,12 @@ pub const TYPES: &[BlockType] = &[
         ],
         outputs: &[PortDoc { name: "u", doc: "control signal" }],
         params: &[
-            param("alpha", None, "[α1, α2] (order 2) or [α1] (order 1)"),
-            param("b0", None, "input gain estimate, as in the LESO"),
-            param("order", Some("2"), "plant order (1 or 2)"),
-            param("lower", Some("-inf"), "lower output limit"),
-            param("upper", Some("inf"), "upper output limit"),
-            param("gain_inputs", Some("[]"), "gains read from ports each step: alpha1, alpha2"),
+            param("alpha", Required, "[α1, α2] (order 2) or [α1] (order 1)"),
+            param("b0", Required, "input gain estimate, as in the LESO"),
+            param("order", Number(2.0), "plant order (1 or 2)"),
+            param("lower", Number(f64::NEG_INFINITY), "lower output limit"),
+            param("upper", Number(f64::INFINITY), "upper output limit"),
+            param("gain_inputs", Described("[]"), "gains read from ports each step: alpha1, alpha2"),
             crate::SAMPLE_TIME_INHERITED,
         ],
         build: build_lsef,
@@ -186,7 +187,7 @@ fn build_td(p: &mut Params) -> Result<Built, Diagnostic> {
     if form == "fhan" && p.has("c_step") {
         return Err(p.error("c_step", "`c_step` belongs to fst (form: fst or paper), not to fhan"));
     }
-    let initial = p.number_or("initial", 0.0)?;
+    let initial = p.number("initial")?;
     let iface = Interface::new(st)
         .input("r", Width::Fixed(1), false)
         .output("r1", Width::Fixed(1))
@@ -338,7 +339,7 @@ impl Block for Leso {
 }
 
 fn build_leso(p: &mut Params) -> Result<Built, Diagnostic> {
-    let order = p.count_or("order", 2, 3)?;
+    let order = p.count("order", 3)?;
     let beta = match (p.opt_number("omega")?, p.opt_vector("beta")?) {
         (Some(w), None) if w > 0.0 && w.is_finite() => bandwidth_gains(order, w),
         (Some(w), None) => return Err(p.error("omega", format!("must be a positive bandwidth, got {w}"))),
@@ -350,7 +351,7 @@ fn build_leso(p: &mut Params) -> Result<Built, Diagnostic> {
         (None, None) => return Err(p.block_error("missing parameter `omega` (or `beta`)")),
     };
     let b0 = p.number_where("b0", None, |v| v != 0.0 && v.is_finite(), "a nonzero input gain")?;
-    let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
+    let initial = p.vector("initial")?;
     let initial = crate::continuous::initial_vector(&initial, order + 1).map_err(|m| p.error("initial", m))?;
     let (st, h) = p.continuous_or_discrete()?;
     let h = h.unwrap_or(0.0);
@@ -394,7 +395,7 @@ impl Block for Lsef {
 }
 
 fn build_lsef(p: &mut Params) -> Result<Built, Diagnostic> {
-    let order = p.count_or("order", 2, 3)?;
+    let order = p.count("order", 3)?;
     if order > 2 {
         return Err(p.error("order", format!("orders 1 and 2 are supported, got {order}")));
     }
@@ -403,9 +404,8 @@ fn build_lsef(p: &mut Params) -> Result<Built, Diagnostic> {
         return Err(p.error("alpha", format!("needs {order} gain(s) for order {order}, got {}", alpha.len())));
     }
     let b0 = p.number_where("b0", None, |v| v != 0.0 && v.is_finite(), "a nonzero input gain")?;
-    let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
-    let mut iface =
-        Interface::new(p.sample_time(SampleTime::Inherited)?).piecewise_constant().input("r1", Width::Fixed(1), true);
+    let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper")?;
+    let mut iface = Interface::new(p.sample_time()?).piecewise_constant().input("r1", Width::Fixed(1), true);
     if order == 2 {
         iface = iface.input("r2", Width::Fixed(1), true);
     }

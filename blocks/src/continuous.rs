@@ -2,7 +2,7 @@
 //! transfer function, zeros-poles-gain or state space (the integrator has
 //! its own module). States are integrated by the simulation's solver.
 
-use crate::{U_ANY, U_SCALAR, Y_SAME, Y_SCALAR, param};
+use crate::{U_ANY, U_SCALAR, Y_SAME, Y_SCALAR, table::*};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
 use ctlgraph_solver::lti::LtiError;
@@ -21,8 +21,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
-            param("tau", Some("1e-3"), "filter time constant τ [s], > 0"),
-            param("initial_input", Some("0"), "the input assumed before t = 0"),
+            param("tau", Number(1e-3), "filter time constant τ, > 0").unit("s"),
+            param("initial_input", Number(0.0), "the input assumed before t = 0"),
         ],
         build: build_derivative,
     },
@@ -49,9 +49,9 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_SCALAR,
         outputs: Y_SCALAR,
         params: &[
-            param("num", None, "numerator coefficients, descending powers of s"),
-            param("den", None, "denominator coefficients, descending powers of s"),
-            param("gain", Some("1"), "a factor multiplying num/den"),
+            param("num", Required, "numerator coefficients, descending powers of s"),
+            param("den", Required, "denominator coefficients, descending powers of s"),
+            param("gain", Number(1.0), "a factor multiplying num/den"),
         ],
         build: build_tf,
     },
@@ -70,9 +70,9 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_SCALAR,
         outputs: Y_SCALAR,
         params: &[
-            param("zeros", Some("[]"), "list of zeros: numbers or [re, im] pairs"),
-            param("poles", None, "list of poles: numbers or [re, im] pairs"),
-            param("gain", Some("1"), "k"),
+            param("zeros", Described("[]"), "list of zeros: numbers or [re, im] pairs"),
+            param("poles", Required, "list of poles: numbers or [re, im] pairs"),
+            param("gain", Number(1.0), "k"),
         ],
         build: build_zpk,
     },
@@ -90,11 +90,11 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[PortDoc { name: "u", doc: "width = columns of B" }],
         outputs: &[PortDoc { name: "y", doc: "width = rows of C" }],
         params: &[
-            param("A", None, "n×n"),
-            param("B", None, "n×m"),
-            param("C", None, "p×n"),
-            param("D", Some("0"), "p×m"),
-            param("initial", Some("0"), "x(0): a number or n numbers"),
+            param("A", Required, "n×n"),
+            param("B", Required, "n×m"),
+            param("C", Required, "p×n"),
+            param("D", Number(0.0), "p×m"),
+            param("initial", Number(0.0), "x(0): a number or n numbers"),
         ],
         build: build_state_space,
     },
@@ -146,8 +146,8 @@ impl Block for Derivative {
 }
 
 fn build_derivative(p: &mut Params) -> Result<Built, Diagnostic> {
-    let tau = p.number_where("tau", Some(1e-3), |v| v > 0.0 && v.is_finite(), "a positive time constant")?;
-    let initial_input = p.number_or("initial_input", 0.0)?;
+    let tau = p.number_where("tau", None, |v| v > 0.0 && v.is_finite(), "a positive time constant")?;
+    let initial_input = p.number("initial_input")?;
     let iface = Interface::new(SampleTime::Continuous).input("u", Width::Common, true).output("y", Width::Common);
     Ok(Built::new(Derivative { tau, initial_input, width: 1 }, iface))
 }
@@ -245,7 +245,7 @@ pub(crate) fn lti_error(p: &Params, e: LtiError) -> Diagnostic {
 
 fn build_tf(p: &mut Params) -> Result<Built, Diagnostic> {
     let (num, den) = (p.polynomial_factors("num")?, p.polynomial_factors("den")?);
-    let gain = p.number_where("gain", Some(1.0), f64::is_finite, "a finite number")?;
+    let gain = p.number_where("gain", None, f64::is_finite, "a finite number")?;
     let ss = factored_tf2ss(&num, &den, gain).map_err(|e| lti_error(p, e))?;
     let n = ss.n;
     Ok(Lti::new(ss, vec![0.0; n]).built())
@@ -258,7 +258,7 @@ fn build_zpk(p: &mut Params) -> Result<Built, Diagnostic> {
         return Err(p.block_error("missing parameter `poles`"));
     }
     let poles = to_c(p.roots("poles")?);
-    let gain = p.number_or("gain", 1.0)?;
+    let gain = p.number("gain")?;
     let (num, den) = zpk2tf(&zeros, &poles, gain).map_err(|e| lti_error(p, e))?;
     let ss = tf2ss(&num, &den).map_err(|e| match e {
         LtiError::Improper { .. } => p.error("zeros", format!("{e}: more zeros than poles")),
@@ -277,7 +277,7 @@ fn build_state_space(p: &mut Params) -> Result<Built, Diagnostic> {
         vec![vec![0.0; m]; c.len()]
     };
     let ss = StateSpace::new(a, b, c, d).map_err(|e| p.error("A", e))?;
-    let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
+    let initial = p.vector("initial")?;
     let x0 = initial_vector(&initial, ss.n).map_err(|m| p.error("initial", m))?;
     Ok(Lti::new(ss, x0).built())
 }

@@ -4,23 +4,20 @@
 //! buffer and interpolate it, as Simulink's Transport Delay does.
 
 use crate::continuous::initial_vector;
-use crate::{SAMPLE_TIME_REQUIRED, U_ANY, Y_SAME, param};
+use crate::{SAMPLE_TIME_REQUIRED, U_ANY, Y_SAME, table::*};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Breakpoint, Diagnostic, Interface, Io, Params, SampleTime, Width};
 use std::collections::VecDeque;
 
-/// The default degree of the history's interpolation (`order`).
-const DEFAULT_ORDER: usize = 3;
-
 const HISTORY_PARAMS: [ctlgraph_core::ParamDoc; 4] = [
-    param("initial", Some("0"), "output until the delay has elapsed (t < delay)"),
+    param("initial", Number(0.0), "output until the delay has elapsed (t < delay)"),
     param(
         "order",
-        Some("3"),
+        Number(3.0),
         "degree of the polynomial through the nearest stored samples: 1 (linear, Simulink's), 3 or 5",
     ),
-    param("buffer", Some("1024"), "initial history capacity in samples; it doubles when full"),
-    param("max_buffer", Some("1e7"), "the most samples the history may hold; beyond, the run stops"),
+    param("buffer", Number(1024.0), "initial history capacity in samples; it doubles when full"),
+    param("max_buffer", Number(1e7), "the most samples the history may hold; beyond, the run stops"),
 ];
 
 pub const TYPES: &[BlockType] = &[
@@ -62,7 +59,7 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
-            param("delay", None, "dead time [s], >= 0"),
+            param("delay", Required, "dead time, >= 0").unit("s"),
             HISTORY_PARAMS[0],
             HISTORY_PARAMS[1],
             HISTORY_PARAMS[2],
@@ -83,7 +80,7 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[PortDoc { name: "u", doc: "any width" }, PortDoc { name: "delay", doc: "τ(t) [s], scalar" }],
         outputs: Y_SAME,
         params: &[
-            param("max_delay", None, "largest delay [s], > 0"),
+            param("max_delay", Required, "largest delay, > 0").unit("s"),
             HISTORY_PARAMS[0],
             HISTORY_PARAMS[1],
             HISTORY_PARAMS[2],
@@ -101,8 +98,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
-            param("samples", Some("1"), "N, a whole number >= 1"),
-            param("initial", Some("0"), "output of the first N samples: a number or one per element"),
+            param("samples", Number(1.0), "N, a whole number >= 1"),
+            param("initial", Number(0.0), "output of the first N samples: a number or one per element"),
             SAMPLE_TIME_REQUIRED,
         ],
         build: build_delay,
@@ -249,16 +246,15 @@ impl Block for TransportDelay {
 }
 
 fn history(p: &mut Params) -> Result<(f64, History), Diagnostic> {
-    let initial = p.number_or("initial", 0.0)?;
-    let degree = match p.number_or("order", DEFAULT_ORDER as f64)? {
+    let initial = p.number("initial")?;
+    let degree = match p.number("order")? {
         1.0 => 1,
         3.0 => 3,
         5.0 => 5,
         other => return Err(p.error("order", format!("must be 1 (linear), 3 (cubic) or 5 (quintic), got {other}"))),
     };
-    let capacity = p.count_or("buffer", 1024, 10_000_000)?;
-    let limit =
-        p.number_where("max_buffer", Some(1e7), |v| (4.0..=1e9).contains(&v), "a number of samples in [4, 1e9]")?;
+    let capacity = p.count("buffer", 10_000_000)?;
+    let limit = p.number_where("max_buffer", None, |v| (4.0..=1e9).contains(&v), "a number of samples in [4, 1e9]")?;
     Ok((initial, History::new(1, capacity, limit as usize, degree)))
 }
 
@@ -339,13 +335,13 @@ impl Block for Delay {
 
 /// A discrete delay of `samples` samples (also `unit_delay`'s implementation).
 pub(crate) fn build_delay_of(p: &mut Params, samples: usize) -> Result<Built, Diagnostic> {
-    let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
+    let initial = p.vector("initial")?;
     let st = p.discrete_sample_time()?;
     let iface = Interface::new(st).input("u", Width::Common, false).output("y", Width::Common);
     Ok(Built::new(Delay { samples, initial, ring: Vec::new(), head: 0 }, iface))
 }
 
 fn build_delay(p: &mut Params) -> Result<Built, Diagnostic> {
-    let samples = p.count_or("samples", 1, 10_000_000)?;
+    let samples = p.count("samples", 10_000_000)?;
     build_delay_of(p, samples)
 }

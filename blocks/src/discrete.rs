@@ -2,7 +2,7 @@
 //! zero-order hold. They run at their sample hits and hold in between.
 
 use crate::continuous::lti_error;
-use crate::{SAMPLE_TIME_REQUIRED, U_ANY, U_SCALAR, Y_SAME, Y_SCALAR, param};
+use crate::{SAMPLE_TIME_REQUIRED, U_ANY, U_SCALAR, Y_SAME, Y_SCALAR, table::*};
 use ctlgraph_core::registry::{BlockType, Built};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 use ctlgraph_solver::{StateSpace, tf2ss};
@@ -20,8 +20,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_SCALAR,
         outputs: Y_SCALAR,
         params: &[
-            param("num", None, "numerator, descending powers of z"),
-            param("den", None, "denominator, descending powers of z"),
+            param("num", Required, "numerator, descending powers of z"),
+            param("den", Required, "denominator, descending powers of z"),
             SAMPLE_TIME_REQUIRED,
         ],
         build: build_dtf,
@@ -34,7 +34,7 @@ pub const TYPES: &[BlockType] = &[
               Bounds: |y| <= max(|initial|, sup|u|), for any period.",
         inputs: U_ANY,
         outputs: Y_SAME,
-        params: &[param("initial", Some("0"), "y(0): a number or one per element"), SAMPLE_TIME_REQUIRED],
+        params: &[param("initial", Number(0.0), "y(0): a number or one per element"), SAMPLE_TIME_REQUIRED],
         build: build_unit_delay,
     },
     BlockType {

@@ -2,7 +2,7 @@
 //! for ARX/FIR models y(k) = φ(k)ᵀθ + e(k) (the contact-force paper's
 //! identification of md, bd, kd, eq. 8–10).
 
-use crate::param;
+use crate::table::*;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
@@ -23,10 +23,10 @@ pub const TYPES: &[BlockType] = &[BlockType {
         PortDoc { name: "error", doc: "a-priori prediction error y − φᵀθ̂" },
     ],
     params: &[
-        param("n", None, "number of parameters"),
-        param("lambda", Some("1"), "forgetting factor, 0 < λ <= 1"),
-        param("p0", Some("1e4"), "initial covariance P(0) = p0·I"),
-        param("initial", Some("0"), "θ̂(0): a number or n numbers"),
+        param("n", Required, "number of parameters"),
+        param("lambda", Number(1.0), "forgetting factor, 0 < λ <= 1"),
+        param("p0", Number(1e4), "initial covariance P(0) = p0·I"),
+        param("initial", Number(0.0), "θ̂(0): a number or n numbers"),
         crate::SAMPLE_TIME_REQUIRED,
     ],
     build: build_rls,
@@ -114,10 +114,10 @@ impl Block for Rls {
 }
 
 fn build_rls(p: &mut Params) -> Result<Built, Diagnostic> {
-    let n = p.count_or("n", 1, 100)?;
-    let lambda = p.number_where("lambda", Some(1.0), |v| v > 0.0 && v <= 1.0, "in (0, 1]")?;
-    let p0 = p.number_where("p0", Some(1e4), |v| v > 0.0 && v.is_finite(), "positive")?;
-    let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
+    let n = p.count("n", 100)?;
+    let lambda = p.number_where("lambda", None, |v| v > 0.0 && v <= 1.0, "in (0, 1]")?;
+    let p0 = p.number_where("p0", None, |v| v > 0.0 && v.is_finite(), "positive")?;
+    let initial = p.vector("initial")?;
     let initial = crate::continuous::initial_vector(&initial, n).map_err(|m| p.error("initial", m))?;
     let st = p.discrete_sample_time()?;
     let iface = Interface::new(st)

@@ -2,9 +2,9 @@
 //! `hit_crossing`, and [`Trigger`], the edge logic they share with the
 //! integrator's reset.
 
-use crate::{SAMPLE_TIME_INHERITED, U_SCALAR, Y_SCALAR, param};
+use crate::{SAMPLE_TIME_INHERITED, U_SCALAR, Y_SCALAR, table::*};
 use ctlgraph_core::registry::{BlockType, Built};
-use ctlgraph_core::{Block, Crossing, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Crossing, Diagnostic, Interface, Io, Params, Width};
 
 pub const TYPES: &[BlockType] = &[
     BlockType {
@@ -21,11 +21,11 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_SCALAR,
         outputs: Y_SCALAR,
         params: &[
-            param("on_threshold", Some("0.5"), "switch-on point"),
-            param("off_threshold", Some("-0.5"), "switch-off point, <= on_threshold"),
-            param("on_value", Some("1"), "output while on"),
-            param("off_value", Some("0"), "output while off"),
-            param("initial", Some("off"), "off or on"),
+            param("on_threshold", Number(0.5), "switch-on point"),
+            param("off_threshold", Number(-0.5), "switch-off point, <= on_threshold"),
+            param("on_value", Number(1.0), "output while on"),
+            param("off_value", Number(0.0), "output while off"),
+            param("initial", Word("off"), "off or on"),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_relay,
@@ -42,8 +42,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_SCALAR,
         outputs: Y_SCALAR,
         params: &[
-            param("level", Some("0"), "the level watched"),
-            param("direction", Some("either"), "rising, falling or either"),
+            param("level", Number(0.0), "the level watched"),
+            param("direction", Word("either"), "rising, falling or either"),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_hit_crossing,
@@ -147,11 +147,11 @@ impl Block for Relay {
 }
 
 fn build_relay(p: &mut Params) -> Result<Built, Diagnostic> {
-    let (off, on) = crate::nonlinear::limits(p, "off_threshold", "on_threshold", (-0.5, 0.5))?;
-    let on_value = p.number_or("on_value", 1.0)?;
-    let off_value = p.number_or("off_value", 0.0)?;
+    let (off, on) = crate::nonlinear::limits(p, "off_threshold", "on_threshold")?;
+    let on_value = p.number("on_value")?;
+    let off_value = p.number("off_value")?;
     let initial_on = p.choice("initial", &["off", "on"])? == "on";
-    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+    let iface = Interface::new(p.sample_time()?)
         .piecewise_constant()
         .input("u", Width::Fixed(1), true)
         .output("y", Width::Fixed(1));
@@ -216,13 +216,13 @@ impl Block for HitCrossing {
 }
 
 fn build_hit_crossing(p: &mut Params) -> Result<Built, Diagnostic> {
-    let level = p.number_or("level", 0.0)?;
+    let level = p.number("level")?;
     let trigger = match p.choice("direction", &["either", "rising", "falling"])? {
         "rising" => Trigger::Rising,
         "falling" => Trigger::Falling,
         _ => Trigger::Either,
     };
-    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+    let iface = Interface::new(p.sample_time()?)
         .piecewise_constant()
         .input("u", Width::Fixed(1), true)
         .output("y", Width::Fixed(1));

@@ -4,7 +4,7 @@
 //! reference filter that supplies smooth derivatives.
 
 use crate::discrete::DiscreteLti;
-use crate::param;
+use crate::table::*;
 use ctlgraph_core::expr::Expr;
 use ctlgraph_core::params::{VarScope, expr_diagnostic};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
@@ -37,12 +37,12 @@ pub const TYPES: &[BlockType] = &[
         ],
         outputs: &[PortDoc { name: "x", doc: "position correction" }],
         params: &[
-            param("m", None, "target mass, > 0"),
-            param("b", None, "target damping, > 0"),
-            param("k", None, "target stiffness, > 0"),
-            param("method", Some("bilinear"), "discrete form: bilinear | backward_euler"),
-            param("hold_input", Some("false"), "true adds the `hold` input (conditional integration)"),
-            param("sample_time", Some("0"), "0 continuous, T > 0 discrete"),
+            param("m", Required, "target mass, > 0"),
+            param("b", Required, "target damping, > 0"),
+            param("k", Required, "target stiffness, > 0"),
+            param("method", Word("bilinear"), "discrete form: bilinear | backward_euler"),
+            param("hold_input", Flag(false), "true adds the `hold` input (conditional integration)"),
+            param("sample_time", Number(0.0), "0 continuous, T > 0 discrete"),
         ],
         build: build_impedance,
     },
@@ -66,9 +66,9 @@ pub const TYPES: &[BlockType] = &[
         ],
         outputs: &[PortDoc { name: "fn", doc: "normal force [N]" }],
         params: &[
-            param("mu_u", None, "friction coefficient when climbing"),
-            param("mu_d", Some("mu_u"), "friction coefficient when descending"),
-            param("select", Some("climbing"), "climbing (a 0/1 input) | slope (a surface-slope input)"),
+            param("mu_u", Required, "friction coefficient when climbing"),
+            param("mu_d", Described("mu_u"), "friction coefficient when descending"),
+            param("select", Word("climbing"), "climbing (a 0/1 input) | slope (a surface-slope input)"),
             crate::SAMPLE_TIME_INHERITED,
         ],
         build: build_normal_force,
@@ -105,14 +105,18 @@ pub const TYPES: &[BlockType] = &[
             PortDoc { name: "slope", doc: "surface slope p'(x)" },
         ],
         params: &[
-            param("profile", None, "surface height as an expression of x (or profile_x/profile_z, or profile_file)"),
-            param("profile_x", None, "table breakpoints (instead of `profile`)"),
-            param("profile_z", None, "table heights"),
-            param("profile_file", None, "CSV with columns x and z (instead of `profile`)"),
+            param(
+                "profile",
+                Required,
+                "surface height as an expression of x (or profile_x/profile_z, or profile_file)",
+            ),
+            param("profile_x", Required, "table breakpoints (instead of `profile`)"),
+            param("profile_z", Required, "table heights"),
+            param("profile_file", Required, "CSV with columns x and z (instead of `profile`)"),
             crate::tables::MAX_FILE_MIB,
-            param("stiffness", None, "k_e [N per length unit]"),
-            param("damping", Some("0"), "c_e [N per (length unit/s)]"),
-            param("mu", Some("0"), "Coulomb friction coefficient"),
+            param("stiffness", Required, "k_e [N per length unit]"),
+            param("damping", Number(0.0), "c_e [N per (length unit/s)]"),
+            param("mu", Number(0.0), "Coulomb friction coefficient"),
         ],
         build: build_contact,
     },
@@ -133,15 +137,15 @@ pub const TYPES: &[BlockType] = &[
         ],
         outputs: &[PortDoc { name: "x", doc: "position" }, PortDoc { name: "v", doc: "velocity" }],
         params: &[
-            param("je", None, "equivalent inertia Je (or give j, ka, kt, rg)"),
-            param("be", None, "equivalent damping Be (or give b, ka, kt, rg)"),
-            param("j", None, "motor-side inertia J [kg·m²]"),
-            param("b", None, "motor-side viscous friction B [N·m·s]"),
-            param("ka", None, "amplifier gain Ka [A/V]"),
-            param("kt", None, "torque constant Kt [N·m/A]"),
-            param("rg", None, "screw lead per radian rg [mm/rad]"),
-            param("initial", Some("[0, 0]"), "[x(0), x'(0)]"),
-            param("disturbance_input", Some("false"), "add the input port d"),
+            param("je", Required, "equivalent inertia Je (or give j, ka, kt, rg)"),
+            param("be", Required, "equivalent damping Be (or give b, ka, kt, rg)"),
+            param("j", Required, "motor-side inertia J").unit("kg·m²"),
+            param("b", Required, "motor-side viscous friction B").unit("N·m·s"),
+            param("ka", Required, "amplifier gain Ka").unit("A/V"),
+            param("kt", Required, "torque constant Kt").unit("N·m/A"),
+            param("rg", Required, "screw lead per radian rg").unit("mm/rad"),
+            param("initial", Numbers(&[0.0, 0.0]), "[x(0), x'(0)]"),
+            param("disturbance_input", Flag(false), "add the input port d"),
         ],
         build: build_feed_drive,
     },
@@ -160,9 +164,9 @@ pub const TYPES: &[BlockType] = &[
             PortDoc { name: "ddx", doc: "its second derivative" },
         ],
         params: &[
-            param("omega", None, "natural frequency ωn [rad/s]"),
-            param("zeta", Some("1"), "damping ratio"),
-            param("initial", Some("0"), "p(0)"),
+            param("omega", Required, "natural frequency ωn").unit("rad/s"),
+            param("zeta", Number(1.0), "damping ratio"),
+            param("initial", Number(0.0), "p(0)"),
         ],
         build: build_reference_filter,
     },
@@ -242,7 +246,7 @@ pub fn discrete_impedance(m: f64, b: f64, k: f64, t: f64, bilinear: bool) -> (Ve
 fn build_impedance(p: &mut Params) -> Result<Built, Diagnostic> {
     let (m, b, k) = (p.positive("m")?, p.positive("b")?, p.positive("k")?);
     let bilinear = p.choice("method", &["bilinear", "backward_euler"])? == "bilinear";
-    let hold = p.bool_or("hold_input", false)?;
+    let hold = p.flag("hold_input")?;
     let (st, period) = p.continuous_or_discrete()?;
     let mut iface = Interface::new(st).input("e", Width::Fixed(1), period.is_some());
     if hold {
@@ -297,7 +301,7 @@ fn build_normal_force(p: &mut Params) -> Result<Built, Diagnostic> {
     let mu_u = p.number_where("mu_u", None, |v| (0.0..1.0).contains(&v), "in [0, 1)")?;
     let mu_d = p.number_where("mu_d", Some(mu_u), |v| (0.0..1.0).contains(&v), "in [0, 1)")?;
     let by_slope = p.choice("select", &["climbing", "slope"])? == "slope";
-    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+    let iface = Interface::new(p.sample_time()?)
         .piecewise_constant()
         .input("fx", Width::Fixed(1), true)
         .input("fz", Width::Fixed(1), true)
@@ -439,8 +443,8 @@ fn build_profile(p: &mut Params) -> Result<Profile, Diagnostic> {
 fn build_contact(p: &mut Params) -> Result<Built, Diagnostic> {
     let profile = build_profile(p)?;
     let stiffness = p.positive("stiffness")?;
-    let damping = p.number_where("damping", Some(0.0), |v| v >= 0.0 && v.is_finite(), "a damping >= 0")?;
-    let mu = p.number_where("mu", Some(0.0), |v| (0.0..1.0).contains(&v), "in [0, 1)")?;
+    let damping = p.number_where("damping", None, |v| v >= 0.0 && v.is_finite(), "a damping >= 0")?;
+    let mu = p.number_where("mu", None, |v| (0.0..1.0).contains(&v), "in [0, 1)")?;
     let mut iface = Interface::new(SampleTime::Continuous);
     for name in ["x", "z", "vx", "vz"] {
         iface = iface.input(name, Width::Fixed(1), true);
@@ -487,9 +491,9 @@ fn build_feed_drive(p: &mut Params) -> Result<Built, Diagnostic> {
         let scale = ka * kt * rg;
         (p.positive("j")? / scale, p.positive("b")? / scale)
     };
-    let init = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0, 0.0]);
+    let init = p.vector("initial")?;
     let [x, v] = init[..] else { return Err(p.error("initial", "expected [x(0), x'(0)]")) };
-    let disturbance = p.bool_or("disturbance_input", false)?;
+    let disturbance = p.flag("disturbance_input")?;
     let mut iface = Interface::new(SampleTime::Continuous).input("u", Width::Fixed(1), false);
     if disturbance {
         iface = iface.input("d", Width::Fixed(1), false);
@@ -535,8 +539,8 @@ impl Block for ReferenceFilter {
 
 fn build_reference_filter(p: &mut Params) -> Result<Built, Diagnostic> {
     let omega = p.positive("omega")?;
-    let zeta = p.number_where("zeta", Some(1.0), |v| v > 0.0 && v.is_finite(), "positive")?;
-    let initial = p.number_or("initial", 0.0)?;
+    let zeta = p.number_where("zeta", None, |v| v > 0.0 && v.is_finite(), "positive")?;
+    let initial = p.number("initial")?;
     let iface = Interface::new(SampleTime::Continuous)
         .input("u", Width::Fixed(1), true)
         .output("x", Width::Fixed(1))

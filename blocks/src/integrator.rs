@@ -4,7 +4,7 @@
 
 use crate::continuous::initial_vector;
 use crate::events::Trigger;
-use crate::param;
+use crate::table::*;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Crossing, Diagnostic, Interface, Io, Params, SampleTime, Width};
 
@@ -41,16 +41,16 @@ pub const TYPES: &[BlockType] = &[BlockType {
         PortDoc { name: "state", doc: "x; with `state_port: true`" },
     ],
     params: &[
-        param("initial", Some("0"), "x(0) and the reset value: a number or one per element"),
+        param("initial", Number(0.0), "x(0) and the reset value: a number or one per element"),
         param(
             "initial_source",
-            Some("internal"),
+            Word("internal"),
             "internal (the `initial` parameter) or external (the `initial` input)",
         ),
-        param("lower", Some("-inf"), "lower limit of x"),
-        param("upper", Some("inf"), "upper limit of x"),
-        param("reset", Some("none"), "none, rising, falling, either or level"),
-        param("state_port", Some("false"), "true adds the `state` output"),
+        param("lower", Number(f64::NEG_INFINITY), "lower limit of x"),
+        param("upper", Number(f64::INFINITY), "upper limit of x"),
+        param("reset", Word("none"), "none, rising, falling, either or level"),
+        param("state_port", Flag(false), "true adds the `state` output"),
     ],
     build: build_integrator,
 }];
@@ -247,8 +247,8 @@ impl Block for Integrator {
 }
 
 fn build_integrator(p: &mut Params) -> Result<Built, Diagnostic> {
-    let initial = p.opt_vector("initial")?.unwrap_or_else(|| vec![0.0]);
-    let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
+    let initial = p.vector("initial")?;
+    let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper")?;
     if let Some(v) = initial.iter().find(|v| !(lower..=upper).contains(*v)) {
         return Err(p.error("initial", format!("{v} is outside [{lower}, {upper}]")));
     }
@@ -260,7 +260,7 @@ fn build_integrator(p: &mut Params) -> Result<Built, Diagnostic> {
         _ => None,
     };
     let external = p.choice("initial_source", &["internal", "external"])? == "external";
-    let state_port = p.bool_or("state_port", false)?;
+    let state_port = p.flag("state_port")?;
     let mut iface = Interface::new(SampleTime::Continuous).input("u", Width::Common, false).output("y", Width::Common);
     let reset_port = iface.inputs.len();
     if reset.is_some() {

@@ -3,7 +3,8 @@
 //! Every block type documents its ports, parameters (with defaults) and
 //! equations in its `BlockType` entry; `ctlgraph blocks TYPE` prints them.
 
-use ctlgraph_core::registry::{ParamDoc, PortDoc, Registry};
+use ctlgraph_core::ParamDefault::{Described, Number, Required};
+use ctlgraph_core::registry::{ParamDefault, ParamDoc, PortDoc, Registry};
 
 /// A block's [`Block::rust_type`](ctlgraph_core::Block::rust_type): its
 /// path as generated code names it, from the module that defines it.
@@ -106,9 +107,15 @@ pub(crate) fn gain_inputs<const N: usize>(
     Ok(ports)
 }
 
-/// Shorthand for parameter documentation tables.
-pub(crate) const fn param(name: &'static str, default: Option<&'static str>, doc: &'static str) -> ParamDoc {
-    ParamDoc { name, default, doc }
+/// Shorthand for parameter tables.
+pub(crate) const fn param(name: &'static str, default: ParamDefault, doc: &'static str) -> ParamDoc {
+    ParamDoc::new(name, default, doc)
+}
+
+/// What a parameter table is written with: [`param`] and the defaults.
+pub(crate) mod table {
+    pub(crate) use super::param;
+    pub(crate) use ctlgraph_core::ParamDefault::{Described, Flag, Number, Numbers, Required, Word};
 }
 
 /// An input of any width, and an output of the same width.
@@ -120,19 +127,19 @@ pub(crate) const Y_SCALAR: &[PortDoc] = &[PortDoc { name: "y", doc: "scalar" }];
 
 /// The `sample_time` parameter of blocks that inherit their rate by default.
 pub(crate) const SAMPLE_TIME_INHERITED: ParamDoc =
-    param("sample_time", Some("-1"), "-1 inherit from inputs, 0 continuous, T > 0 every T seconds, [T, offset]");
+    param("sample_time", Number(-1.0), "-1 inherit from inputs, 0 continuous, T > 0 every T seconds, [T, offset]");
 
 /// The optional active window of every source.
 pub(crate) const ACTIVE: ParamDoc =
-    param("active", Some("always"), "[t_on, t_off]: the source outputs zero before t_on and from t_off on");
+    param("active", Described("always"), "[t_on, t_off]: the source outputs zero before t_on and from t_off on");
 
 /// The `sample_time` parameter of sources, continuous by default.
 pub(crate) const SAMPLE_TIME_CONTINUOUS: ParamDoc =
-    param("sample_time", Some("0"), "0 continuous, T > 0 sampled every T seconds and held, [T, offset]");
+    param("sample_time", Number(0.0), "0 continuous, T > 0 sampled every T seconds and held, [T, offset]");
 
 /// The `sample_time` parameter of blocks that only exist in discrete form.
 pub(crate) const SAMPLE_TIME_REQUIRED: ParamDoc =
-    param("sample_time", None, "period T > 0 in seconds, or [T, offset] with 0 <= offset < T");
+    param("sample_time", Required, "period T > 0 in seconds, or [T, offset] with 0 <= offset < T");
 
 #[cfg(test)]
 mod tests {

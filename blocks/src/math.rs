@@ -3,7 +3,7 @@
 //! width, scalar inputs broadcast.
 
 use crate::nonlinear::Piecewise;
-use crate::{SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, Y_SCALAR, param};
+use crate::{SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, Y_SCALAR, table::*};
 use ctlgraph_core::expr::Expr;
 use ctlgraph_core::params::{VarScope, expr_diagnostic};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
@@ -22,7 +22,10 @@ pub const TYPES: &[BlockType] = &[
               width); a list of rows is a matrix K and y = K u (width rows(K)).",
         inputs: U_ANY,
         outputs: Y_SAME,
-        params: &[param("k", Some("1"), "number, list (elementwise) or list of rows (matrix)"), SAMPLE_TIME_INHERITED],
+        params: &[
+            param("k", Number(1.0), "number, list (elementwise) or list of rows (matrix)"),
+            SAMPLE_TIME_INHERITED,
+        ],
         build: build_gain,
     },
     BlockType {
@@ -33,7 +36,7 @@ pub const TYPES: &[BlockType] = &[
               sign the block sums the elements of its one (vector) input into a scalar.",
         inputs: UN,
         outputs: Y_ELEMENTWISE,
-        params: &[param("signs", Some("++"), "one + or - per input"), SAMPLE_TIME_INHERITED],
+        params: &[param("signs", Word("++"), "one + or - per input"), SAMPLE_TIME_INHERITED],
         build: build_sum,
     },
     BlockType {
@@ -44,7 +47,7 @@ pub const TYPES: &[BlockType] = &[
               Division by zero gives ±inf, which stops the run naming this block.",
         inputs: UN,
         outputs: Y_ELEMENTWISE,
-        params: &[param("ops", Some("**"), "one * or / per input"), SAMPLE_TIME_INHERITED],
+        params: &[param("ops", Word("**"), "one * or / per input"), SAMPLE_TIME_INHERITED],
         build: build_product,
     },
     BlockType {
@@ -88,7 +91,7 @@ pub const TYPES: &[BlockType] = &[
               uj − u_selected locate where another input takes over (for the multi-input form).",
         inputs: UN,
         outputs: Y_ELEMENTWISE,
-        params: &[param("inputs", Some("2"), "number of input ports"), SAMPLE_TIME_INHERITED],
+        params: &[param("inputs", Number(2.0), "number of input ports"), SAMPLE_TIME_INHERITED],
         build: build_min,
     },
     BlockType {
@@ -99,7 +102,7 @@ pub const TYPES: &[BlockType] = &[
               uj − u_selected locate where another input takes over (for the multi-input form).",
         inputs: UN,
         outputs: Y_ELEMENTWISE,
-        params: &[param("inputs", Some("2"), "number of input ports"), SAMPLE_TIME_INHERITED],
+        params: &[param("inputs", Number(2.0), "number of input ports"), SAMPLE_TIME_INHERITED],
         build: build_max,
     },
     BlockType {
@@ -113,9 +116,13 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[PortDoc { name: "u1 … un", doc: "scalars (`u` when inputs: 1)" }],
         outputs: Y_SCALAR,
         params: &[
-            param("expr", None, "the formula, e.g. \"u1 * sin(2*pi*t)\""),
-            param("inputs", Some("1"), "number of input ports (0: a function of time only)"),
-            SAMPLE_TIME_INHERITED,
+            param("expr", Required, "the formula, e.g. \"u1 * sin(2*pi*t)\""),
+            param("inputs", Number(1.0), "number of input ports (0: a function of time only)"),
+            param(
+                "sample_time",
+                Described("0 when expr reads t, else -1"),
+                "-1 inherit from inputs, 0 continuous, T > 0 every T seconds, [T, offset]",
+            ),
         ],
         build: build_fcn,
     },
@@ -127,7 +134,7 @@ fn port_names(n: usize) -> Vec<String> {
 
 /// An elementwise block over n inputs of common width.
 fn nary(p: &mut Params, n: usize, block: impl Block + 'static) -> Result<Built, Diagnostic> {
-    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).piecewise_constant();
+    let mut iface = Interface::new(p.sample_time()?).piecewise_constant();
     for name in port_names(n) {
         iface = iface.input(&name, Width::Common, true);
     }
@@ -218,7 +225,7 @@ impl Block for Gain {
 
 fn build_gain(p: &mut Params) -> Result<Built, Diagnostic> {
     let is_matrix = matches!(p.raw("k").map(|v| &v.kind), Some(Kind::Seq(rows)) if rows.iter().any(|r| matches!(r.kind, Kind::Seq(_))));
-    let st = p.sample_time(SampleTime::Inherited)?;
+    let st = p.sample_time()?;
     if is_matrix {
         let rows = p.matrix("k")?;
         let cols = rows[0].len();
@@ -231,7 +238,7 @@ fn build_gain(p: &mut Params) -> Result<Built, Diagnostic> {
             .output("y", Width::Fixed(rows.len()));
         return Ok(Built::new(Gain::Matrix { k: rows.concat(), cols }, iface));
     }
-    let k = p.opt_vector("k")?.unwrap_or_else(|| vec![1.0]);
+    let k = p.vector("k")?;
     if k.is_empty() {
         return Err(p.error("k", "needs at least one number"));
     }
@@ -282,7 +289,7 @@ impl Block for Sum {
 }
 
 fn build_sum(p: &mut Params) -> Result<Built, Diagnostic> {
-    let text = p.opt_string("signs")?.unwrap_or("++");
+    let text = p.string("signs")?;
     let signs: Vec<f64> = text
         .chars()
         .filter(|c| *c != '|' && !c.is_whitespace())
@@ -296,7 +303,7 @@ fn build_sum(p: &mut Params) -> Result<Built, Diagnostic> {
         return Err(p.error("signs", "needs at least one sign"));
     }
     if signs.len() == 1 {
-        let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        let iface = Interface::new(p.sample_time()?)
             .piecewise_constant()
             .input("u1", Width::Common, true)
             .output("y", Width::Fixed(1));
@@ -330,7 +337,7 @@ impl Block for Product {
 }
 
 fn build_product(p: &mut Params) -> Result<Built, Diagnostic> {
-    let text = p.opt_string("ops")?.unwrap_or("**");
+    let text = p.string("ops")?;
     let divide: Vec<bool> = text
         .chars()
         .filter(|c| !c.is_whitespace())
@@ -415,9 +422,9 @@ impl Block for Extremum {
 }
 
 fn build_extremum(p: &mut Params, max: bool) -> Result<Built, Diagnostic> {
-    let inputs = p.count_or("inputs", 2, 10_000)?;
+    let inputs = p.count("inputs", 10_000)?;
     if inputs == 1 {
-        let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        let iface = Interface::new(p.sample_time()?)
             .piecewise_constant()
             .input("u1", Width::Common, true)
             .output("y", Width::Fixed(1));
@@ -458,7 +465,7 @@ impl Block for Fcn {
 }
 
 fn build_fcn(p: &mut Params) -> Result<Built, Diagnostic> {
-    let n = p.number_where("inputs", Some(1.0), |v| v >= 0.0 && v.fract() == 0.0 && v < 1e4, "a whole number")?;
+    let n = p.number_where("inputs", None, |v| v >= 0.0 && v.fract() == 0.0 && v < 1e4, "a whole number")?;
     let n = n as usize;
     let Some(src) = p.raw("expr") else {
         return Err(p.block_error("missing parameter `expr`"));
@@ -494,7 +501,7 @@ fn build_fcn(p: &mut Params) -> Result<Built, Diagnostic> {
     })?;
     let reads_time = expr.uses_slot(n);
     let default = if reads_time { SampleTime::Continuous } else { SampleTime::Inherited };
-    let mut iface = Interface::new(p.sample_time(default)?);
+    let mut iface = Interface::new(p.sample_time_or(default)?);
     if !reads_time {
         iface = iface.piecewise_constant();
     }

@@ -8,7 +8,7 @@
 
 pub mod lobes;
 
-use crate::param;
+use crate::table::*;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Crossing, Diagnostic, Interface, Io, Params, SampleTime, Width};
 use std::f64::consts::{PI, TAU};
@@ -53,20 +53,20 @@ pub const TYPES: &[BlockType] = &[BlockType {
         PortDoc { name: "fr_tooth", doc: "radial force per tooth, width N (with tooth_outputs: true)" },
     ],
     params: &[
-        param("teeth", None, "number of teeth N, 1 … 64"),
-        param("rpm", None, "spindle speed [rev/min], > 0"),
-        param("kt", None, "tangential cutting coefficient Kt [N/mm²], >= 0"),
-        param("kr", None, "radial-to-tangential ratio Kr = Fr/Ft, >= 0 (or give krc)"),
-        param("krc", None, "radial coefficient [N/mm²] instead of kr: Kr = krc/kt"),
-        param("ap", None, "axial depth of cut [mm], >= 0"),
-        param("ft", None, "feed per tooth ft [mm], >= 0"),
-        param("milling", Some("up"), "up | down (with immersion)"),
-        param("immersion", Some("1"), "radial immersion ae/D in (0, 1]"),
-        param("entry", None, "entry angle φst [deg], instead of milling/immersion"),
-        param("exit", None, "exit angle φex [deg], entry < exit <= entry + 360"),
-        param("phase", Some("0"), "angle φ0 of tooth 0 at t = 0 [deg]"),
-        param("zero_crossing", Some("true"), "watch h_j = 0 (false: a plain max(0, ·))"),
-        param("tooth_outputs", Some("false"), "add the outputs h, ft_tooth, fr_tooth per tooth"),
+        param("teeth", Required, "number of teeth N, 1 … 64"),
+        param("rpm", Required, "spindle speed, > 0").unit("rev/min"),
+        param("kt", Required, "tangential cutting coefficient Kt, >= 0").unit("N/mm²"),
+        param("kr", Required, "radial-to-tangential ratio Kr = Fr/Ft, >= 0 (or give krc)"),
+        param("krc", Required, "radial coefficient instead of kr: Kr = krc/kt").unit("N/mm²"),
+        param("ap", Required, "axial depth of cut, >= 0").unit("mm"),
+        param("ft", Required, "feed per tooth ft, >= 0").unit("mm"),
+        param("milling", Word("up"), "up | down (with immersion)"),
+        param("immersion", Number(1.0), "radial immersion ae/D in (0, 1]"),
+        param("entry", Required, "entry angle φst, instead of milling/immersion").unit("deg"),
+        param("exit", Required, "exit angle φex, entry < exit <= entry + 360").unit("deg"),
+        param("phase", Number(0.0), "angle φ0 of tooth 0 at t = 0").unit("deg"),
+        param("zero_crossing", Flag(true), "watch h_j = 0 (false: a plain max(0, ·))"),
+        param("tooth_outputs", Flag(false), "add the outputs h, ft_tooth, fr_tooth per tooth"),
     ],
     build: build_milling_force,
 }];
@@ -282,7 +282,7 @@ fn immersion_angles(p: &mut Params) -> Result<(f64, f64), Diagnostic> {
         return Ok((entry.to_radians(), exit.to_radians()));
     }
     let mode = p.choice("milling", &["up", "down"])?;
-    let a = p.number_where("immersion", Some(1.0), |v| v > 0.0 && v <= 1.0, "ae/D in (0, 1]")?;
+    let a = p.number_where("immersion", None, |v| v > 0.0 && v <= 1.0, "ae/D in (0, 1]")?;
     Ok(engagement(mode == "up", a))
 }
 
@@ -314,9 +314,9 @@ fn build_milling_force(p: &mut Params) -> Result<Built, Diagnostic> {
     let ap = p.number_where("ap", None, non_negative, "a depth >= 0 [mm]")?;
     let feed = p.number_where("ft", None, non_negative, "a feed per tooth >= 0 [mm]")?;
     let (entry, exit) = immersion_angles(p)?;
-    let phase = p.number_where("phase", Some(0.0), f64::is_finite, "a finite angle [deg]")?.to_radians();
-    let zero_crossing = p.bool_or("zero_crossing", true)?;
-    let tooth_outputs = p.bool_or("tooth_outputs", false)?;
+    let phase = p.number_where("phase", None, f64::is_finite, "a finite angle [deg]")?.to_radians();
+    let zero_crossing = p.flag("zero_crossing")?;
+    let tooth_outputs = p.flag("tooth_outputs")?;
     let cutter = Cutter { teeth, omega: TAU * rpm / 60.0, kt, kr, ap, feed, entry, exit, phase };
     let mut iface = Interface::new(SampleTime::Continuous);
     for name in ["x", "y", "x_delayed", "y_delayed"] {

@@ -6,7 +6,7 @@ pub mod bspline;
 pub mod interpolator;
 pub mod sync;
 
-use crate::param;
+use crate::table::*;
 use ctlgraph_core::expr::Expr;
 use ctlgraph_core::params::VarScope;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
@@ -40,17 +40,17 @@ const BSPLINE_PATH: BlockType = BlockType {
         PortDoc { name: "ddo", doc: "O''(u)" },
     ],
     params: &[
-        param("points", None, "the points, a list of [x, y] or [x, y, z] (or give curve)"),
-        param("curve", None, "expressions of v, one per coordinate (instead of points)"),
-        param("range", Some("[0, 1]"), "[v_start, v_end] for curve"),
-        param("samples", Some("50"), "points sampled from curve, 4 … 100000"),
-        param("control_points", Some("min(points, 20)"), "control points, 4 … number of points"),
-        param("csv", None, "a CSV file with the points, one per row (instead of points or curve)"),
-        param("columns", Some("[x, y, z]"), "the CSV's coordinate columns, 2 or 3"),
-        param("max_file_mib", Some("256"), "largest CSV file read, in MiB"),
-        param("axis_points", None, "points on the tool axis, one per path point"),
-        param("axis_csv", None, "a CSV file with the axis points (same columns)"),
-        param("axis_curve", None, "expressions of v for the axis points (same range and samples)"),
+        param("points", Required, "the points, a list of [x, y] or [x, y, z] (or give curve)"),
+        param("curve", Required, "expressions of v, one per coordinate (instead of points)"),
+        param("range", Numbers(&[0.0, 1.0]), "[v_start, v_end] for curve"),
+        param("samples", Number(50.0), "points sampled from curve, 4 … 100000"),
+        param("control_points", Described("min(points, 20)"), "control points, 4 … number of points"),
+        param("csv", Required, "a CSV file with the points, one per row (instead of points or curve)"),
+        param("columns", Described("[x, y, z]"), "the CSV's coordinate columns, 2 or 3"),
+        param("max_file_mib", Number(256.0), "largest CSV file read, in MiB"),
+        param("axis_points", Required, "points on the tool axis, one per path point"),
+        param("axis_csv", Required, "a CSV file with the axis points (same columns)"),
+        param("axis_curve", Required, "expressions of v for the axis points (same range and samples)"),
     ],
     build: build_bspline_path,
 };
@@ -128,11 +128,11 @@ fn read_points(p: &mut Params, prefix: &str) -> Result<Option<(Vec<f64>, usize)>
             if !(2..=3).contains(&exprs.len()) {
                 return Err(p.error(curve_key, "give 2 or 3 expressions of v, one per coordinate"));
             }
-            let range = p.opt_vector("range")?.unwrap_or_else(|| vec![0.0, 1.0]);
+            let range = p.vector("range")?;
             if range.len() != 2 || range[0] >= range[1] || range.iter().any(|v| !v.is_finite()) {
                 return Err(p.error("range", "expected [v_start, v_end] with v_start < v_end"));
             }
-            let samples = p.count_or("samples", 50, 100_000)?;
+            let samples = p.count("samples", 100_000)?;
             if samples < 4 {
                 return Err(p.error("samples", "a cubic needs at least 4 points"));
             }
@@ -198,8 +198,8 @@ const MIRROR_OFFSET: BlockType = BlockType {
     ],
     outputs: &[PortDoc { name: "q", doc: "support-head point, width 3" }],
     params: &[
-        param("thickness", None, "wall thickness H, > 0"),
-        param("depth", Some("0"), "depth of cut d, 0 <= d < H"),
+        param("thickness", Required, "wall thickness H, > 0"),
+        param("depth", Number(0.0), "depth of cut d, 0 <= d < H"),
     ],
     build: build_mirror_offset,
 };
@@ -230,7 +230,7 @@ impl Block for MirrorOffset {
 
 fn build_mirror_offset(p: &mut Params) -> Result<Built, Diagnostic> {
     let thickness = p.positive("thickness")?;
-    let depth = p.number_where("depth", Some(0.0), |d| (0.0..thickness).contains(&d), "in [0, thickness)")?;
+    let depth = p.number_where("depth", None, |d| (0.0..thickness).contains(&d), "in [0, thickness)")?;
     let iface = Interface::new(SampleTime::Inherited)
         .input("p", Width::Fixed(3), true)
         .input("n", Width::Fixed(3), true)
@@ -264,17 +264,17 @@ const S_CURVE: BlockType = BlockType {
         PortDoc { name: "s", doc: "path length travelled [length]" },
     ],
     params: &[
-        param("length", None, "path length L, > 0"),
-        param("feed", None, "maximum feed F, > 0"),
-        param("accel", None, "maximum tangential acceleration A, > 0"),
-        param("jerk", None, "maximum tangential jerk J, > 0"),
-        param("start", Some("0"), "start time [s]"),
-        param("radius", None, "path radius of curvature ρ, for the curvature limits below"),
-        param("tc", None, "interpolation period Tc [s] (with chord_error)"),
-        param("chord_error", None, "chord (sagitta) error limit δ (with radius, tc)"),
-        param("accel_normal", None, "normal acceleration limit An (with radius)"),
-        param("jerk_normal", None, "normal jerk limit Jn (with radius)"),
-        param("omega", None, "tool-axis angular speed limit ω [rad/s] (with radius)"),
+        param("length", Required, "path length L, > 0"),
+        param("feed", Required, "maximum feed F, > 0"),
+        param("accel", Required, "maximum tangential acceleration A, > 0"),
+        param("jerk", Required, "maximum tangential jerk J, > 0"),
+        param("start", Number(0.0), "start time").unit("s"),
+        param("radius", Required, "path radius of curvature ρ, for the curvature limits below"),
+        param("tc", Required, "interpolation period Tc (with chord_error)").unit("s"),
+        param("chord_error", Required, "chord (sagitta) error limit δ (with radius, tc)"),
+        param("accel_normal", Required, "normal acceleration limit An (with radius)"),
+        param("jerk_normal", Required, "normal jerk limit Jn (with radius)"),
+        param("omega", Required, "tool-axis angular speed limit ω (with radius)").unit("rad/s"),
     ],
     build: build_s_curve,
 };
@@ -432,7 +432,7 @@ fn build_s_curve(p: &mut Params) -> Result<Built, Diagnostic> {
     let length = p.positive("length")?;
     let mut feed = p.positive("feed")?;
     let (accel, jerk) = (p.positive("accel")?, p.positive("jerk")?);
-    let start = p.number_where("start", Some(0.0), f64::is_finite, "a finite time [s]")?;
+    let start = p.number_where("start", None, f64::is_finite, "a finite time [s]")?;
     let optional = |p: &mut Params, key: &str| if p.has(key) { p.positive(key).map(Some) } else { Ok(None) };
     let radius = optional(p, "radius")?;
     let (tc, chord_error) = (optional(p, "tc")?, optional(p, "chord_error")?);

@@ -4,16 +4,16 @@
 //! adding a block elsewhere changes no other block's noise; a stream
 //! restarts with the run.
 
-use crate::{ACTIVE, Y_SCALAR, param};
+use crate::{ACTIVE, Y_SCALAR, table::*};
 use ctlgraph_core::registry::{BlockType, Built};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::{Rng, SeedableRng};
 
 const SEED: ctlgraph_core::ParamDoc =
-    param("seed", Some("0"), "mixed with the graph seed and the block name into this block's stream");
+    param("seed", Number(0.0), "mixed with the graph seed and the block name into this block's stream");
 const SAMPLE_TIME: ctlgraph_core::ParamDoc =
-    param("sample_time", None, "period T > 0 at which a new value is drawn and then held");
+    param("sample_time", Required, "period T > 0 at which a new value is drawn and then held");
 
 pub const TYPES: &[BlockType] = &[
     BlockType {
@@ -26,7 +26,7 @@ pub const TYPES: &[BlockType] = &[
               than the fastest time constant it excites.",
         inputs: &[],
         outputs: Y_SCALAR,
-        params: &[param("power", Some("0.1"), "noise power (PSD height) [units²·s]"), SAMPLE_TIME, SEED, ACTIVE],
+        params: &[param("power", Number(0.1), "noise power (PSD height)").unit("units²·s"), SAMPLE_TIME, SEED, ACTIVE],
         build: build_band_limited,
     },
     BlockType {
@@ -38,8 +38,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[],
         outputs: Y_SCALAR,
         params: &[
-            param("amplitude", Some("1"), "half-width of the interval, >= 0"),
-            param("mean", Some("0"), "centre of the interval"),
+            param("amplitude", Number(1.0), "half-width of the interval, >= 0"),
+            param("mean", Number(0.0), "centre of the interval"),
             SAMPLE_TIME,
             SEED,
             ACTIVE,
@@ -55,8 +55,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[],
         outputs: Y_SCALAR,
         params: &[
-            param("variance", Some("1"), ">= 0"),
-            param("mean", Some("0"), "mean value"),
+            param("variance", Number(1.0), ">= 0"),
+            param("mean", Number(0.0), "mean value"),
             SAMPLE_TIME,
             SEED,
             ACTIVE,
@@ -141,27 +141,27 @@ impl Block for Noise {
 
 fn noise(p: &mut Params, law: Law) -> Result<Built, Diagnostic> {
     let st = p.discrete_sample_time()?;
-    let extra = p.number_where("seed", Some(0.0), |v| v >= 0.0 && v.fract() == 0.0, "a whole number >= 0")?;
+    let extra = p.number_where("seed", None, |v| v >= 0.0 && v.fract() == 0.0, "a whole number >= 0")?;
     let stream = Stream::new(p.stream_seed(extra as u64));
     let block = Noise { law, stream, value: 0.0 };
     crate::sources::windowed(p, Built::new(block, Interface::new(st).output("y", Width::Fixed(1))))
 }
 
 fn build_band_limited(p: &mut Params) -> Result<Built, Diagnostic> {
-    let power = p.number_where("power", Some(0.1), |v| v >= 0.0 && v.is_finite(), "a power >= 0")?;
+    let power = p.number_where("power", None, |v| v >= 0.0 && v.is_finite(), "a power >= 0")?;
     let (_, t, _) = p.discrete_clock()?;
     noise(p, Law::Normal { mean: 0.0, std: (power / t).sqrt() })
 }
 
 fn build_uniform(p: &mut Params) -> Result<Built, Diagnostic> {
-    let amplitude = p.number_where("amplitude", Some(1.0), |v| v >= 0.0 && v.is_finite(), "an amplitude >= 0")?;
-    let mean = p.number_or("mean", 0.0)?;
+    let amplitude = p.number_where("amplitude", None, |v| v >= 0.0 && v.is_finite(), "an amplitude >= 0")?;
+    let mean = p.number("mean")?;
     noise(p, Law::Uniform { mean, amplitude })
 }
 
 fn build_gaussian(p: &mut Params) -> Result<Built, Diagnostic> {
-    let variance = p.number_where("variance", Some(1.0), |v| v >= 0.0 && v.is_finite(), "a variance >= 0")?;
-    let mean = p.number_or("mean", 0.0)?;
+    let variance = p.number_where("variance", None, |v| v >= 0.0 && v.is_finite(), "a variance >= 0")?;
+    let mean = p.number("mean")?;
     noise(p, Law::Normal { mean, std: variance.sqrt() })
 }
 

@@ -2,9 +2,9 @@
 //! [`Piecewise`], the zero-crossing machinery of elementwise blocks with
 //! corners (saturation, dead zone, abs, sign).
 
-use crate::{SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, param};
+use crate::{SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, table::*};
 use ctlgraph_core::registry::{BlockType, Built};
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
 /// What every piecewise block's doc says about its modes.
 macro_rules! piecewise_doc {
@@ -30,8 +30,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
-            param("lower", Some("-1"), "lower limit (may be -inf)"),
-            param("upper", Some("1"), "upper limit, >= lower (may be inf)"),
+            param("lower", Number(-1.0), "lower limit (may be -inf)"),
+            param("upper", Number(1.0), "upper limit, >= lower (may be inf)"),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_saturation,
@@ -47,8 +47,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
-            param("start", Some("-0.5"), "lower edge of the dead zone"),
-            param("end", Some("0.5"), "upper edge, >= start"),
+            param("start", Number(-0.5), "lower edge of the dead zone"),
+            param("end", Number(0.5), "upper edge, >= start"),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_dead_zone,
@@ -67,10 +67,10 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
-            param("rising", Some("1"), "largest rate of increase [units/s], > 0"),
-            param("falling", Some("-1"), "most negative rate [units/s], < 0"),
-            param("initial", Some("0"), "output at t = 0"),
-            param("sample_time", Some("0"), "0 continuous, T > 0 discrete"),
+            param("rising", Number(1.0), "largest rate of increase, > 0").unit("units/s"),
+            param("falling", Number(-1.0), "most negative rate, < 0").unit("units/s"),
+            param("initial", Number(0.0), "output at t = 0"),
+            param("sample_time", Number(0.0), "0 continuous, T > 0 discrete"),
         ],
         build: build_rate_limiter,
     },
@@ -96,7 +96,7 @@ impl Piecewise {
 
     /// Builds the block with one input `u` and output `y` of any width.
     pub fn build(self, p: &mut Params) -> Result<Built, Diagnostic> {
-        let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+        let iface = Interface::new(p.sample_time()?)
             .piecewise_constant()
             .input("u", Width::Common, true)
             .output("y", Width::Common);
@@ -140,8 +140,8 @@ impl Block for Piecewise {
 }
 
 /// Reads `lower`/`upper`-style limit pairs, checking their order.
-pub(crate) fn limits(p: &mut Params, lo: &str, hi: &str, defaults: (f64, f64)) -> Result<(f64, f64), Diagnostic> {
-    let (lower, upper) = (p.number_or(lo, defaults.0)?, p.number_or(hi, defaults.1)?);
+pub(crate) fn limits(p: &mut Params, lo: &str, hi: &str) -> Result<(f64, f64), Diagnostic> {
+    let (lower, upper) = (p.number(lo)?, p.number(hi)?);
     if lower > upper || lower.is_nan() || upper.is_nan() {
         return Err(p.error(hi, format!("`{hi}` ({upper}) must be >= `{lo}` ({lower})")));
     }
@@ -158,12 +158,12 @@ pub fn saturation(lower: f64, upper: f64) -> Piecewise {
 }
 
 fn build_saturation(p: &mut Params) -> Result<Built, Diagnostic> {
-    let (lower, upper) = limits(p, "lower", "upper", (-1.0, 1.0))?;
+    let (lower, upper) = limits(p, "lower", "upper")?;
     saturation(lower, upper).build(p)
 }
 
 fn build_dead_zone(p: &mut Params) -> Result<Built, Diagnostic> {
-    let (start, end) = limits(p, "start", "end", (-0.5, 0.5))?;
+    let (start, end) = limits(p, "start", "end")?;
     Piecewise::new(vec![start, end], |b, r, u| match r {
         0 => u - b[0],
         1 => 0.0,
@@ -226,10 +226,10 @@ impl Block for RateLimiter {
 }
 
 fn build_rate_limiter(p: &mut Params) -> Result<Built, Diagnostic> {
-    let rising = p.number_where("rising", Some(1.0), |v| v > 0.0, "positive")?;
-    let falling = p.number_where("falling", Some(-1.0), |v| v < 0.0, "negative")?;
-    let initial = p.number_or("initial", 0.0)?;
-    let st = p.sample_time(SampleTime::Continuous)?;
+    let rising = p.number_where("rising", None, |v| v > 0.0, "positive")?;
+    let falling = p.number_where("falling", None, |v| v < 0.0, "negative")?;
+    let initial = p.number("initial")?;
+    let st = p.sample_time()?;
     let iface = Interface::new(st).input("u", Width::Common, true).output("y", Width::Common);
     Ok(Built::new(RateLimiter::new(rising, falling, initial), iface))
 }

@@ -2,7 +2,7 @@
 //! limits with anti-windup, continuous or discrete, and optional gain
 //! input ports for gain scheduling.
 
-use crate::param;
+use crate::table::*;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
@@ -28,17 +28,17 @@ pub const TYPES: &[BlockType] = &[BlockType {
     ],
     outputs: &[PortDoc { name: "u", doc: "control signal (scalar)" }],
     params: &[
-        param("kp", Some("1"), "proportional gain"),
-        param("ki", Some("0"), "integral gain [1/s]"),
-        param("kd", Some("0"), "derivative gain [s]"),
-        param("n", Some("100"), "derivative filter coefficient N [rad/s]"),
-        param("lower", Some("-inf"), "lower output limit"),
-        param("upper", Some("inf"), "upper output limit"),
-        param("anti_windup", Some("clamping"), "clamping | back_calculation | none"),
-        param("kb", Some("1"), "back-calculation gain [1/s]"),
-        param("initial", Some("0"), "initial integrator output I(0)"),
-        param("gain_inputs", Some("[]"), "gains read from input ports each step: any of kp, ki, kd"),
-        param("sample_time", Some("0"), "0 continuous, T > 0 discrete"),
+        param("kp", Number(1.0), "proportional gain"),
+        param("ki", Number(0.0), "integral gain").unit("1/s"),
+        param("kd", Number(0.0), "derivative gain").unit("s"),
+        param("n", Number(100.0), "derivative filter coefficient N").unit("rad/s"),
+        param("lower", Number(f64::NEG_INFINITY), "lower output limit"),
+        param("upper", Number(f64::INFINITY), "upper output limit"),
+        param("anti_windup", Word("clamping"), "clamping | back_calculation | none"),
+        param("kb", Number(1.0), "back-calculation gain").unit("1/s"),
+        param("initial", Number(0.0), "initial integrator output I(0)"),
+        param("gain_inputs", Described("[]"), "gains read from input ports each step: any of kp, ki, kd"),
+        param("sample_time", Number(0.0), "0 continuous, T > 0 discrete"),
     ],
     build: build_pid,
 }];
@@ -211,16 +211,16 @@ impl Block for DiscretePid {
 }
 
 fn build_pid(p: &mut Params) -> Result<Built, Diagnostic> {
-    let (kp, ki, kd) = (p.number_or("kp", 1.0)?, p.number_or("ki", 0.0)?, p.number_or("kd", 0.0)?);
-    let n = p.number_where("n", Some(100.0), |v| v > 0.0 && v.is_finite(), "a positive filter coefficient")?;
-    let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
-    let kb = p.number_or("kb", 1.0)?;
+    let (kp, ki, kd) = (p.number("kp")?, p.number("ki")?, p.number("kd")?);
+    let n = p.number_where("n", None, |v| v > 0.0 && v.is_finite(), "a positive filter coefficient")?;
+    let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper")?;
+    let kb = p.number("kb")?;
     let anti_windup = match p.choice("anti_windup", &["clamping", "back_calculation", "none"])? {
         "back_calculation" => AntiWindup::BackCalculation { kb },
         "none" => AntiWindup::None,
         _ => AntiWindup::Clamping,
     };
-    let initial = p.number_or("initial", 0.0)?;
+    let initial = p.number("initial")?;
     let (st, period) = p.continuous_or_discrete()?;
     let mut iface = Interface::new(st).input("e", Width::Fixed(1), true);
     let gain_ports = crate::gain_inputs(p, ["kp", "ki", "kd"], &mut iface)?;

@@ -2,9 +2,9 @@
 //! the loader handles itself (subsystem, inport, outport), listed here so
 //! `ctlgraph blocks` documents them.
 
-use crate::{SAMPLE_TIME_INHERITED, param};
+use crate::{SAMPLE_TIME_INHERITED, table::*};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Kernel, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Kernel, Params, Width};
 
 pub const TYPES: &[BlockType] = &[
     BlockType {
@@ -15,8 +15,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[PortDoc { name: "u1 … un", doc: "widths as given" }],
         outputs: &[PortDoc { name: "y", doc: "width = sum of the input widths" }],
         params: &[
-            param("inputs", Some("2"), "number of scalar inputs (when `widths` is not given)"),
-            param("widths", None, "width of each input, e.g. [2, 1]"),
+            param("inputs", Number(2.0), "number of scalar inputs (when `widths` is not given)"),
+            param("widths", Required, "width of each input, e.g. [2, 1]"),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_mux,
@@ -29,8 +29,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[PortDoc { name: "u", doc: "width = sum of the output widths" }],
         outputs: &[PortDoc { name: "y1 … yn", doc: "widths as given" }],
         params: &[
-            param("outputs", Some("2"), "number of scalar outputs (when `widths` is not given)"),
-            param("widths", None, "width of each output"),
+            param("outputs", Number(2.0), "number of scalar outputs (when `widths` is not given)"),
+            param("widths", Required, "width of each output"),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_demux,
@@ -42,7 +42,7 @@ pub const TYPES: &[BlockType] = &[
         doc: "y[i] = u[indices[i]], indices counted from 1 (as MATLAB); repeats allowed.",
         inputs: &[PortDoc { name: "u", doc: "any width >= the largest index" }],
         outputs: &[PortDoc { name: "y", doc: "width = number of indices" }],
-        params: &[param("indices", None, "list of 1-based indices"), SAMPLE_TIME_INHERITED],
+        params: &[param("indices", Required, "list of 1-based indices"), SAMPLE_TIME_INHERITED],
         build: build_selector,
     },
     BlockType {
@@ -60,8 +60,8 @@ pub const TYPES: &[BlockType] = &[
         ],
         outputs: &[PortDoc { name: "y", doc: "width of u1/u2" }],
         params: &[
-            param("threshold", Some("0"), "compared with control"),
-            param("criterion", Some(">="), ">= | > | !=0"),
+            param("threshold", Number(0.0), "compared with control"),
+            param("criterion", Word(">="), ">= | > | !=0"),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_switch,
@@ -77,8 +77,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[PortDoc { name: "(inports)", doc: "one per inport block of the file" }],
         outputs: &[PortDoc { name: "(outports)", doc: "one per outport block of the file" }],
         params: &[
-            param("file", None, "graph file, relative to this one"),
-            param("parameters", Some("{}"), "overrides of the subsystem's parameters"),
+            param("file", Required, "graph file, relative to this one"),
+            param("parameters", Described("{}"), "overrides of the subsystem's parameters"),
         ],
         build: structural,
     },
@@ -94,8 +94,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[],
         outputs: &[PortDoc { name: "out", doc: "the outer signal (top level: the host's value)" }],
         params: &[
-            param("width", Some("1"), "top level only: the number of elements"),
-            param("value", Some("0"), "top level only: the value before the host sets one"),
+            param("width", Number(1.0), "top level only: the number of elements"),
+            param("value", Number(0.0), "top level only: the value before the host sets one"),
         ],
         build: structural,
     },
@@ -131,7 +131,7 @@ fn widths(p: &mut Params, count_key: &str) -> Result<Vec<usize>, Diagnostic> {
         }
         return Ok(ws.iter().map(|w| *w as usize).collect());
     }
-    Ok(vec![1; p.count_or(count_key, 2, MAX_PORTS)?])
+    Ok(vec![1; p.count(count_key, MAX_PORTS)?])
 }
 
 /// Concatenates the inputs in port order.
@@ -157,7 +157,7 @@ impl Block for Concat {
 
 fn build_mux(p: &mut Params) -> Result<Built, Diagnostic> {
     let ws = widths(p, "inputs")?;
-    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).piecewise_constant();
+    let mut iface = Interface::new(p.sample_time()?).piecewise_constant();
     for (i, w) in ws.iter().enumerate() {
         iface = iface.input(&format!("u{}", i + 1), Width::Fixed(*w), true);
     }
@@ -189,11 +189,8 @@ impl Block for Split {
 
 fn build_demux(p: &mut Params) -> Result<Built, Diagnostic> {
     let ws = widths(p, "outputs")?;
-    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).piecewise_constant().input(
-        "u",
-        Width::Fixed(ws.iter().sum()),
-        true,
-    );
+    let mut iface =
+        Interface::new(p.sample_time()?).piecewise_constant().input("u", Width::Fixed(ws.iter().sum()), true);
     for (i, w) in ws.iter().enumerate() {
         iface = iface.output(&format!("y{}", i + 1), Width::Fixed(*w));
     }
@@ -229,7 +226,7 @@ fn build_selector(p: &mut Params) -> Result<Built, Diagnostic> {
     }
     let idx: Vec<usize> = idx.iter().map(|i| *i as usize - 1).collect();
     let n = idx.len();
-    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+    let iface = Interface::new(p.sample_time()?)
         .piecewise_constant()
         .input("u", Width::Common, true)
         .output("y", Width::Fixed(n));
@@ -286,13 +283,13 @@ impl Block for Switch {
 }
 
 fn build_switch(p: &mut Params) -> Result<Built, Diagnostic> {
-    let threshold = p.number_or("threshold", 0.0)?;
+    let threshold = p.number("threshold")?;
     let criterion = match p.choice("criterion", &[">=", ">", "!=0"])? {
         ">" => Criterion::Above,
         "!=0" => Criterion::NonZero,
         _ => Criterion::AtLeast,
     };
-    let iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
+    let iface = Interface::new(p.sample_time()?)
         .piecewise_constant()
         .input("u1", Width::Common, true)
         .input("control", Width::Fixed(1), true)

@@ -2,9 +2,9 @@
 //! with an adaptive disturbance estimate, and a general first-order
 //! sliding-mode law with a boundary layer.
 
-use crate::param;
+use crate::table::*;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
 pub const TYPES: &[BlockType] = &[
     BlockType {
@@ -34,16 +34,16 @@ pub const TYPES: &[BlockType] = &[
             PortDoc { name: "d_hat", doc: "disturbance estimate" },
         ],
         params: &[
-            param("lambda", None, "sliding-surface slope λ > 0 [1/s]"),
-            param("ks", None, "reaching gain Ks > 0 [V/(length/s)]"),
-            param("rho", None, "adaptation gain ρ > 0 [V/length]"),
-            param("je", None, "plant inertia Je (as feed_drive)"),
-            param("be", None, "plant damping Be (as feed_drive)"),
-            param("d_min", None, "lower bound of d̂"),
-            param("d_max", None, "upper bound of d̂"),
-            param("lower", Some("-inf"), "lower limit of u"),
-            param("upper", Some("inf"), "upper limit of u"),
-            param("sample_time", Some("0"), "0 continuous, T > 0 discrete"),
+            param("lambda", Required, "sliding-surface slope λ > 0").unit("1/s"),
+            param("ks", Required, "reaching gain Ks > 0").unit("V/(length/s)"),
+            param("rho", Required, "adaptation gain ρ > 0").unit("V/length"),
+            param("je", Required, "plant inertia Je (as feed_drive)"),
+            param("be", Required, "plant damping Be (as feed_drive)"),
+            param("d_min", Required, "lower bound of d̂"),
+            param("d_max", Required, "upper bound of d̂"),
+            param("lower", Number(f64::NEG_INFINITY), "lower limit of u"),
+            param("upper", Number(f64::INFINITY), "upper limit of u"),
+            param("sample_time", Number(0.0), "0 continuous, T > 0 discrete"),
         ],
         build: build_sliding_mode,
     },
@@ -63,10 +63,10 @@ pub const TYPES: &[BlockType] = &[
         ],
         outputs: &[PortDoc { name: "u", doc: "control" }, PortDoc { name: "s", doc: "sliding variable" }],
         params: &[
-            param("lambda", None, "surface slope λ > 0"),
-            param("k", None, "switching gain k >= 0"),
-            param("phi", Some("0"), "boundary-layer width φ >= 0 (0: sign)"),
-            param("equivalent_input", Some("false"), "add the input port u_eq"),
+            param("lambda", Required, "surface slope λ > 0"),
+            param("k", Required, "switching gain k >= 0"),
+            param("phi", Number(0.0), "boundary-layer width φ >= 0 (0: sign)"),
+            param("equivalent_input", Flag(false), "add the input port u_eq"),
             crate::SAMPLE_TIME_INHERITED,
         ],
         build: build_smc,
@@ -156,7 +156,7 @@ fn build_sliding_mode(p: &mut Params) -> Result<Built, Diagnostic> {
     if d_min > d_max {
         return Err(p.error("d_max", format!("`d_max` ({d_max}) must be >= `d_min` ({d_min})")));
     }
-    let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper", (f64::NEG_INFINITY, f64::INFINITY))?;
+    let (lower, upper) = crate::nonlinear::limits(p, "lower", "upper")?;
     let (st, period) = p.continuous_or_discrete()?;
     let period = period.unwrap_or(0.0);
     let mut iface = Interface::new(st);
@@ -190,12 +190,13 @@ impl Block for Smc {
 fn build_smc(p: &mut Params) -> Result<Built, Diagnostic> {
     let lambda = p.positive("lambda")?;
     let k = p.number_where("k", None, |v| v >= 0.0 && v.is_finite(), "a gain >= 0")?;
-    let phi = p.number_where("phi", Some(0.0), |v| v >= 0.0 && v.is_finite(), "a width >= 0")?;
-    let equivalent = p.bool_or("equivalent_input", false)?;
-    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?)
-        .piecewise_constant()
-        .input("e", Width::Fixed(1), true)
-        .input("de", Width::Fixed(1), true);
+    let phi = p.number_where("phi", None, |v| v >= 0.0 && v.is_finite(), "a width >= 0")?;
+    let equivalent = p.flag("equivalent_input")?;
+    let mut iface = Interface::new(p.sample_time()?).piecewise_constant().input("e", Width::Fixed(1), true).input(
+        "de",
+        Width::Fixed(1),
+        true,
+    );
     if equivalent {
         iface = iface.input("u_eq", Width::Fixed(1), true);
     }

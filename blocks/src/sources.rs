@@ -1,6 +1,6 @@
 //! Sources: constant, step, ramp, sine, pulse, clock.
 
-use crate::{ACTIVE, SAMPLE_TIME_CONTINUOUS, Y_SCALAR, param};
+use crate::{ACTIVE, SAMPLE_TIME_CONTINUOUS, Y_SCALAR, table::*};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, TimeOnly, Width};
 
@@ -12,7 +12,7 @@ pub const TYPES: &[BlockType] = &[
         doc: "y = value. Computed once, at the start of the run.",
         inputs: &[],
         outputs: &[PortDoc { name: "y", doc: "the value; width = number of elements of `value`" }],
-        params: &[param("value", Some("1"), "a number or a list of numbers"), ACTIVE],
+        params: &[param("value", Number(1.0), "a number or a list of numbers"), ACTIVE],
         build: build_constant,
     },
     BlockType {
@@ -24,9 +24,9 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[],
         outputs: Y_SCALAR,
         params: &[
-            param("at", Some("0"), "switching time [s]"),
-            param("initial", Some("0"), "value before `at`"),
-            param("value", Some("1"), "value from `at` on"),
+            param("at", Number(0.0), "switching time").unit("s"),
+            param("initial", Number(0.0), "value before `at`"),
+            param("value", Number(1.0), "value from `at` on"),
             SAMPLE_TIME_CONTINUOUS,
             ACTIVE,
         ],
@@ -40,9 +40,9 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[],
         outputs: Y_SCALAR,
         params: &[
-            param("slope", Some("1"), "units per second"),
-            param("start", Some("0"), "start time [s]"),
-            param("initial", Some("0"), "output before `start`"),
+            param("slope", Number(1.0), "units per second"),
+            param("start", Number(0.0), "start time").unit("s"),
+            param("initial", Number(0.0), "output before `start`"),
             SAMPLE_TIME_CONTINUOUS,
             ACTIVE,
         ],
@@ -56,10 +56,10 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[],
         outputs: Y_SCALAR,
         params: &[
-            param("amplitude", Some("1"), "peak value"),
-            param("frequency", Some("1"), "[Hz]"),
-            param("phase", Some("0"), "[rad]"),
-            param("bias", Some("0"), "offset added to the wave"),
+            param("amplitude", Number(1.0), "peak value"),
+            param("frequency", Number(1.0), "").unit("Hz"),
+            param("phase", Number(0.0), "").unit("rad"),
+            param("bias", Number(0.0), "offset added to the wave"),
             SAMPLE_TIME_CONTINUOUS,
             ACTIVE,
         ],
@@ -74,10 +74,10 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[],
         outputs: Y_SCALAR,
         params: &[
-            param("amplitude", Some("1"), "pulse height"),
-            param("period", Some("1"), "[s], > 0"),
-            param("duty", Some("0.5"), "fraction of the period the pulse is high, in (0, 1)"),
-            param("delay", Some("0"), "time of the first rising edge [s]"),
+            param("amplitude", Number(1.0), "pulse height"),
+            param("period", Number(1.0), ", > 0").unit("s"),
+            param("duty", Number(0.5), "fraction of the period the pulse is high, in (0, 1)"),
+            param("delay", Number(0.0), "time of the first rising edge").unit("s"),
             SAMPLE_TIME_CONTINUOUS,
             ACTIVE,
         ],
@@ -147,7 +147,7 @@ fn scalar_source<F: Fn(&Io) -> f64 + Send + Sync + Clone + 'static>(
     piecewise: bool,
     f: F,
 ) -> Result<Built, Diagnostic> {
-    let st = p.sample_time(SampleTime::Continuous)?;
+    let st = p.sample_time()?;
     let mut iface = Interface::new(st).output("y", Width::Fixed(1));
     iface.piecewise_constant = piecewise;
     windowed(p, Built::new(TimeFn { f, events, last: TimeFn::<F>::NONE }, iface))
@@ -222,7 +222,7 @@ pub(crate) fn windowed(p: &mut Params, built: Built) -> Result<Built, Diagnostic
 }
 
 fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
-    let value = p.opt_vector("value")?.unwrap_or_else(|| vec![1.0]);
+    let value = p.vector("value")?;
     if value.is_empty() {
         return Err(p.error("value", "needs at least one number"));
     }
@@ -244,14 +244,13 @@ fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 fn build_step(p: &mut Params) -> Result<Built, Diagnostic> {
-    let at = p.number_or("at", 0.0)?;
-    let (initial, value) = (p.number_or("initial", 0.0)?, p.number_or("value", 1.0)?);
+    let at = p.number("at")?;
+    let (initial, value) = (p.number("initial")?, p.number("value")?);
     scalar_source(p, vec![at], true, move |io| if io.reached(at) { value } else { initial })
 }
 
 fn build_ramp(p: &mut Params) -> Result<Built, Diagnostic> {
-    let (slope, start, initial) =
-        (p.number_or("slope", 1.0)?, p.number_or("start", 0.0)?, p.number_or("initial", 0.0)?);
+    let (slope, start, initial) = (p.number("slope")?, p.number("start")?, p.number("initial")?);
     scalar_source(
         p,
         vec![start],
@@ -261,9 +260,9 @@ fn build_ramp(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 fn build_sine(p: &mut Params) -> Result<Built, Diagnostic> {
-    let amplitude = p.number_or("amplitude", 1.0)?;
-    let w = 2.0 * std::f64::consts::PI * p.number_or("frequency", 1.0)?;
-    let (phase, bias) = (p.number_or("phase", 0.0)?, p.number_or("bias", 0.0)?);
+    let amplitude = p.number("amplitude")?;
+    let w = 2.0 * std::f64::consts::PI * p.number("frequency")?;
+    let (phase, bias) = (p.number("phase")?, p.number("bias")?);
     scalar_source(p, Vec::new(), false, move |io| bias + amplitude * (w * io.t + phase).sin())
 }
 
@@ -272,11 +271,11 @@ fn build_clock(p: &mut Params) -> Result<Built, Diagnostic> {
 }
 
 fn build_pulse(p: &mut Params) -> Result<Built, Diagnostic> {
-    let amplitude = p.number_or("amplitude", 1.0)?;
-    let period = p.number_where("period", Some(1.0), |v| v > 0.0 && v.is_finite(), "a positive number")?;
-    let duty = p.number_where("duty", Some(0.5), |v| v > 0.0 && v < 1.0, "strictly between 0 and 1")?;
-    let delay = p.number_or("delay", 0.0)?;
-    let st = p.sample_time(SampleTime::Continuous)?;
+    let amplitude = p.number("amplitude")?;
+    let period = p.number_where("period", None, |v| v > 0.0 && v.is_finite(), "a positive number")?;
+    let duty = p.number_where("duty", None, |v| v > 0.0 && v < 1.0, "strictly between 0 and 1")?;
+    let delay = p.number("delay")?;
+    let st = p.sample_time()?;
     let pulse = Pulse { amplitude, period, high: duty * period, delay };
     windowed(p, Built::new(pulse, Interface::new(st).piecewise_constant().output("y", Width::Fixed(1))))
 }

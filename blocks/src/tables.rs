@@ -1,9 +1,9 @@
 //! Tabulated data: 1-D lookup tables and time series read from CSV files,
 //! both by linear interpolation.
 
-use crate::{SAMPLE_TIME_CONTINUOUS, SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, Y_SCALAR, param};
+use crate::{SAMPLE_TIME_CONTINUOUS, SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, Y_SCALAR, table::*};
 use ctlgraph_core::registry::{BlockType, Built, ParamDoc};
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
 pub const TYPES: &[BlockType] = &[
     BlockType {
@@ -15,9 +15,9 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
-            param("x", None, "breakpoints, strictly increasing, at least two"),
-            param("y", None, "table values, one per breakpoint"),
-            param("extrapolation", Some("clamp"), "clamp | linear"),
+            param("x", Required, "breakpoints, strictly increasing, at least two"),
+            param("y", Required, "table values, one per breakpoint"),
+            param("extrapolation", Word("clamp"), "clamp | linear"),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_lookup,
@@ -32,10 +32,10 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[],
         outputs: Y_SCALAR,
         params: &[
-            param("file", None, "CSV file with a header row"),
-            param("column", None, "header of the value column"),
-            param("time", Some("t"), "header of the time column"),
-            param("extrapolation", Some("hold"), "hold | linear | zero"),
+            param("file", Required, "CSV file with a header row"),
+            param("column", Required, "header of the value column"),
+            param("time", Word("t"), "header of the time column"),
+            param("extrapolation", Word("hold"), "hold | linear | zero"),
             MAX_FILE_MIB,
             SAMPLE_TIME_CONTINUOUS,
             crate::ACTIVE,
@@ -139,7 +139,7 @@ fn build_lookup(p: &mut Params) -> Result<Built, Diagnostic> {
         _ => Outside::Clamp,
     };
     let table = Table::new(x, y, outside).map_err(|m| p.error("y", m))?;
-    let st = p.sample_time(SampleTime::Inherited)?;
+    let st = p.sample_time()?;
     let iface = Interface::new(st).piecewise_constant().input("u", Width::Common, true).output("y", Width::Common);
     Ok(Built::new(Lookup(table), iface))
 }
@@ -161,7 +161,7 @@ impl Block for Series {
 fn build_from_csv(p: &mut Params) -> Result<Built, Diagnostic> {
     let path = p.path("file")?;
     let column = p.string("column")?;
-    let time = p.opt_string("time")?.unwrap_or("t");
+    let time = p.string("time")?;
     let outside = match p.choice("extrapolation", &["hold", "linear", "zero"])? {
         "linear" => Outside::Linear,
         "zero" => Outside::Zero,
@@ -170,23 +170,20 @@ fn build_from_csv(p: &mut Params) -> Result<Built, Diagnostic> {
     let limit = data_file_limit(p)?;
     let (ts, ys) = read_columns(&path, time, column, limit).map_err(|m| p.error("file", m))?;
     let table = Table::new(ts, ys, outside).map_err(|m| p.error("file", format!("`{}`: {m}", path.display())))?;
-    let st = p.sample_time(SampleTime::Continuous)?;
+    let st = p.sample_time()?;
     crate::sources::windowed(p, Built::new(Series(table), Interface::new(st).output("y", Width::Fixed(1))))
 }
 
-/// The largest data file a block reads by default, in MiB: a CSV of 256 MiB
-/// holds some ten million rows; anything larger is more likely a wrong
-/// path. A block's `max_file_mib` raises it.
-pub const MAX_DATA_FILE_MIB: usize = 256;
-
-/// The `max_file_mib` parameter of the blocks that read a data file.
+/// The `max_file_mib` parameter of the blocks that read a data file: a CSV
+/// of 256 MiB holds some ten million rows; anything larger is more likely
+/// a wrong path.
 pub(crate) const MAX_FILE_MIB: ParamDoc =
-    param("max_file_mib", Some("256"), "largest data file read, in MiB (a larger file is refused)");
+    param("max_file_mib", Number(256.0), "largest data file read, in MiB (a larger file is refused)");
 
 /// The size limit of a block's data file in bytes, from `max_file_mib`
 /// (at most 1 TiB).
 pub(crate) fn data_file_limit(p: &mut Params) -> Result<u64, Diagnostic> {
-    Ok((p.count_or("max_file_mib", MAX_DATA_FILE_MIB, 1 << 20)? as u64) << 20)
+    Ok((p.count("max_file_mib", 1 << 20)? as u64) << 20)
 }
 
 /// Reads two columns by header name, a row at a time; errors name the

@@ -4,8 +4,8 @@
 
 use crate::block::{Block, Interface};
 use crate::diag::Diagnostic;
-pub use crate::params::ParamDoc;
 use crate::params::Params;
+pub use crate::params::{ParamDefault, ParamDoc};
 use std::collections::BTreeMap;
 
 /// A port, as documented.

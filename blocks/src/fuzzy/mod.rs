@@ -8,10 +8,10 @@ mod grid;
 mod partition;
 mod terms;
 
-use crate::{SAMPLE_TIME_INHERITED, param};
+use crate::{SAMPLE_TIME_INHERITED, table::*};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::yaml::{Key, Kind, Yaml, lookup};
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 use fis::*;
 
 pub const TYPES: &[BlockType] = &[BlockType {
@@ -39,16 +39,16 @@ pub const TYPES: &[BlockType] = &[BlockType {
     inputs: &[PortDoc { name: "(inputs)", doc: "one scalar port per input variable" }],
     outputs: &[PortDoc { name: "(outputs)", doc: "one scalar port per output variable" }],
     params: &[
-        param("inputs", None, "mapping name -> { range: [lo, hi], terms: N or { term: [mf, …] } }"),
-        param("outputs", None, "the same for outputs (Sugeno: terms map names to constants)"),
-        param("rules", None, "mapping output -> table, or a list of `if … then …` sentences"),
-        param("kind", Some("mamdani"), "mamdani | sugeno"),
-        param("and", Some("min"), "min | product"),
-        param("or", Some("max"), "max | probor"),
-        param("implication", Some("min"), "min | product"),
-        param("aggregation", Some("max"), "max | sum"),
-        param("defuzzification", Some("centroid"), "centroid | bisector | mom | som | lom"),
-        param("resolution", Some("201"), "points on each output universe (Mamdani)"),
+        param("inputs", Required, "mapping name -> { range: [lo, hi], terms: N or { term: [mf, …] } }"),
+        param("outputs", Required, "the same for outputs (Sugeno: terms map names to constants)"),
+        param("rules", Required, "mapping output -> table, or a list of `if … then …` sentences"),
+        param("kind", Word("mamdani"), "mamdani | sugeno"),
+        param("and", Word("min"), "min | product"),
+        param("or", Word("max"), "max | probor"),
+        param("implication", Word("min"), "min | product"),
+        param("aggregation", Word("max"), "max | sum"),
+        param("defuzzification", Word("centroid"), "centroid | bisector | mom | som | lom"),
+        param("resolution", Number(201.0), "points on each output universe (Mamdani)"),
         SAMPLE_TIME_INHERITED,
     ],
     build: build_fuzzy,
@@ -105,9 +105,9 @@ fn build_fuzzy(p: &mut Params) -> Result<Built, Diagnostic> {
             "lom" => Defuzzification::LargestOfMaximum,
             _ => Defuzzification::Centroid,
         },
-        resolution: p.count_or("resolution", 201, 100_000)?.max(2),
+        resolution: p.count("resolution", 100_000)?.max(2),
     };
-    let mut iface = Interface::new(p.sample_time(SampleTime::Inherited)?).piecewise_constant();
+    let mut iface = Interface::new(p.sample_time()?).piecewise_constant();
     for v in &inputs {
         iface = iface.input(&v.name, Width::Fixed(1), true);
     }

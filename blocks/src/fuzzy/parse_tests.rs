@@ -14,8 +14,9 @@ fn read_variables(yaml: &str, sugeno: bool) -> Result<Vec<Variable>, Diagnostic>
 }
 
 fn membership_of(yaml: &str, sugeno: bool) -> Result<Mf, Diagnostic> {
-    with_params("fuzzy", &format!("term: {yaml}"), |p| {
-        let v = p.raw("term").expect("term");
+    // Any key of the type's table holds the value; `inputs` is one.
+    with_params("fuzzy", &format!("inputs: {yaml}"), |p| {
+        let v = p.raw("inputs").expect("inputs");
         membership(p, v, sugeno)
     })
 }

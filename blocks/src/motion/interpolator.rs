@@ -2,7 +2,7 @@
 //! Tc, the path parameter u advances by its second-order Taylor expansion
 //! in time (the mirror-milling paper's eq. 8).
 
-use crate::param;
+use crate::table::*;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
@@ -27,8 +27,8 @@ pub const PATH_INTERPOLATOR: BlockType = BlockType {
     ],
     outputs: &[PortDoc { name: "u", doc: "path parameter u_j in [0, 1]" }],
     params: &[
-        param("sample_time", None, "interpolation period Tc [s] (required)"),
-        param("initial", Some("0"), "u at the start, in [0, 1]"),
+        param("sample_time", Required, "interpolation period Tc (required)").unit("s"),
+        param("initial", Number(0.0), "u at the start, in [0, 1]"),
     ],
     build: build_path_interpolator,
 };
@@ -75,7 +75,7 @@ impl Block for PathInterpolator {
 
 fn build_path_interpolator(p: &mut Params) -> Result<Built, Diagnostic> {
     let (st, tc, _) = p.discrete_clock()?;
-    let initial = p.number_where("initial", Some(0.0), |u| (0.0..=1.0).contains(&u), "in [0, 1]")?;
+    let initial = p.number_where("initial", None, |u| (0.0..=1.0).contains(&u), "in [0, 1]")?;
     let iface = Interface::new(st)
         .input("f", Width::Fixed(1), false)
         .input("a", Width::Fixed(1), false)

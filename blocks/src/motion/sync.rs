@@ -5,7 +5,7 @@
 use super::bspline::{BSpline, chord_parameters};
 use super::interpolator::taylor_step;
 use super::{SCurve, read_points, shown};
-use crate::param;
+use crate::table::*;
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
@@ -43,25 +43,25 @@ pub const MIRROR_FEED_PLAN: BlockType = BlockType {
         PortDoc { name: "qa", doc: "support acceleration command ḟ2·T_S + f2²·κN_S" },
     ],
     params: &[
-        param("points", None, "machining path points (or curve, range, samples as bspline_path)"),
-        param("curve", None, "expressions of v for the machining path"),
-        param("range", Some("[0, 1]"), "[v_start, v_end] for the curves"),
-        param("samples", Some("50"), "points sampled from the curves"),
-        param("support_points", None, "support path points, one per machining point (or support_curve)"),
-        param("support_curve", None, "expressions of v for the support path"),
-        param("csv", None, "a CSV file with the machining points (columns as bspline_path)"),
-        param("support_csv", None, "a CSV file with the support points"),
-        param("columns", Some("[x, y, z]"), "the CSVs' coordinate columns, 2 or 3"),
-        param("max_file_mib", Some("256"), "largest CSV file read, in MiB"),
-        param("control_points", Some("min(points, 20)"), "control points of both fits"),
-        param("feed", None, "machining side's maximum feed, > 0"),
-        param("accel", None, "machining side's maximum tangential acceleration, > 0"),
-        param("jerk", None, "machining side's maximum tangential jerk, > 0"),
-        param("support_feed", Some("inf"), "support side's maximum feed"),
-        param("support_accel", Some("inf"), "support side's maximum |df2/dt|"),
-        param("reduce", Some("0.01"), "fraction the machining feed limit is lowered by per re-plan, 1e-4 … 0.5"),
-        param("sample_time", None, "interpolation period Tc [s] (required)"),
-        param("start", Some("0"), "time the motion begins [s], a whole number of periods Tc"),
+        param("points", Required, "machining path points (or curve, range, samples as bspline_path)"),
+        param("curve", Required, "expressions of v for the machining path"),
+        param("range", Numbers(&[0.0, 1.0]), "[v_start, v_end] for the curves"),
+        param("samples", Number(50.0), "points sampled from the curves"),
+        param("support_points", Required, "support path points, one per machining point (or support_curve)"),
+        param("support_curve", Required, "expressions of v for the support path"),
+        param("csv", Required, "a CSV file with the machining points (columns as bspline_path)"),
+        param("support_csv", Required, "a CSV file with the support points"),
+        param("columns", Described("[x, y, z]"), "the CSVs' coordinate columns, 2 or 3"),
+        param("max_file_mib", Number(256.0), "largest CSV file read, in MiB"),
+        param("control_points", Described("min(points, 20)"), "control points of both fits"),
+        param("feed", Required, "machining side's maximum feed, > 0"),
+        param("accel", Required, "machining side's maximum tangential acceleration, > 0"),
+        param("jerk", Required, "machining side's maximum tangential jerk, > 0"),
+        param("support_feed", Number(f64::INFINITY), "support side's maximum feed"),
+        param("support_accel", Number(f64::INFINITY), "support side's maximum |df2/dt|"),
+        param("reduce", Number(0.01), "fraction the machining feed limit is lowered by per re-plan, 1e-4 … 0.5"),
+        param("sample_time", Required, "interpolation period Tc (required)").unit("s"),
+        param("start", Number(0.0), "time the motion begins, a whole number of periods Tc").unit("s"),
     ],
     build: build_mirror_feed_plan,
 };
@@ -305,12 +305,12 @@ fn build_mirror_feed_plan(p: &mut Params) -> Result<Built, Diagnostic> {
         feed: p.positive("feed")?,
         accel: p.positive("accel")?,
         jerk: p.positive("jerk")?,
-        support_feed: p.number_where("support_feed", Some(f64::INFINITY), positive_or_inf, "> 0")?,
-        support_accel: p.number_where("support_accel", Some(f64::INFINITY), positive_or_inf, "> 0")?,
-        reduce: p.number_where("reduce", Some(0.01), |r| (1e-4..=0.5).contains(&r), "a fraction in [1e-4, 0.5]")?,
+        support_feed: p.number_where("support_feed", None, positive_or_inf, "> 0")?,
+        support_accel: p.number_where("support_accel", None, positive_or_inf, "> 0")?,
+        reduce: p.number_where("reduce", None, |r| (1e-4..=0.5).contains(&r), "a fraction in [1e-4, 0.5]")?,
         tc,
     };
-    let start = p.number_where("start", Some(0.0), |s| (0.0..1e9).contains(&s), ">= 0 and < 1e9")?;
+    let start = p.number_where("start", None, |s| (0.0..1e9).contains(&s), ">= 0 and < 1e9")?;
     let periods = start / tc;
     if (periods - periods.round()).abs() > 1e-9 * periods.max(1.0) {
         return Err(p.error("start", format!("{start} s is not a whole number of periods of {tc} s")));

@@ -10,14 +10,10 @@ use crate::expr::{Constants, Expr, ExprError, Scope};
 use crate::yaml::{Key, Kind, Yaml};
 use std::path::{Path, PathBuf};
 
-/// One parameter of a block type, as `ctlgraph blocks TYPE` shows it.
-#[derive(Clone, Copy, Debug)]
-pub struct ParamDoc {
-    pub name: &'static str,
-    /// Default as written in a graph file; `None` means required.
-    pub default: Option<&'static str>,
-    pub doc: &'static str,
-}
+mod table;
+#[cfg(test)]
+mod tests;
+pub use table::{ParamDefault, ParamDoc};
 
 /// A block's parameters as written, with the scope their expressions see.
 pub struct Params<'a> {
@@ -80,6 +76,7 @@ impl<'a> Params<'a> {
 
     /// The raw value of `key`, marking it used.
     pub fn raw(&mut self, key: &str) -> Option<&'a Yaml> {
+        self.declared(key);
         let i = self.entries.iter().position(|(k, _)| k.name == key)?;
         self.used[i] = true;
         Some(&self.entries[i].1)
@@ -87,6 +84,7 @@ impl<'a> Params<'a> {
 
     /// Whether `key` is present (without marking it used).
     pub fn has(&self, key: &str) -> bool {
+        self.declared(key);
         self.entries.iter().any(|(k, _)| k.name == key)
     }
 
@@ -99,6 +97,36 @@ impl<'a> Params<'a> {
     /// An error about the block as a whole, at its name.
     pub fn block_error(&self, message: impl std::fmt::Display) -> Diagnostic {
         Diagnostic::at(self.block_pos, format!("block `{}` ({}): {message}", self.block, self.type_name))
+    }
+
+    /// The block type's table entry for `key`. A block reading a key its
+    /// table does not list is a mistake in the block (its documentation
+    /// would not show the parameter): a debug build stops there, so the
+    /// tests, which build every type, find it. Blocks without a table
+    /// (custom blocks that document nothing) are not checked.
+    fn declared(&self, key: &str) -> Option<&'static ParamDoc> {
+        let entry = self.docs.iter().find(|d| d.name == key);
+        debug_assert!(
+            self.docs.is_empty() || entry.is_some(),
+            "block type `{}` reads parameter `{key}`, which its parameter table does not list",
+            self.type_name
+        );
+        entry
+    }
+
+    /// What the table gives `key` when the graph leaves it out (required
+    /// for a block without a table).
+    fn default_of(&self, key: &str) -> ParamDefault {
+        self.declared(key).map_or(ParamDefault::Required, |d| d.default)
+    }
+
+    /// The error for a block asking for `key` as `wanted` where its table's
+    /// default is of another kind: a mistake in the block, not the graph.
+    fn default_mismatch(&self, key: &str, wanted: &str) -> Diagnostic {
+        self.block_error(format!(
+            "internal error: the block reads `{key}` as {wanted}, but its table's default is `{}`",
+            self.default_of(key)
+        ))
     }
 
     fn missing(&self, key: &str) -> Diagnostic {
@@ -125,27 +153,36 @@ impl<'a> Params<'a> {
         Ok(x)
     }
 
-    /// A required number.
+    /// A number: the graph's, else the table's default; required when
+    /// the table says so.
     pub fn number(&mut self, key: &str) -> Result<f64, Diagnostic> {
-        match self.raw(key) {
-            Some(v) => self.number_value(key, v),
-            None => Err(self.missing(key)),
-        }
+        self.opt_number(key)?.ok_or_else(|| self.missing(key))
     }
 
-    /// An optional number.
+    /// A number, or `None` when the graph leaves it out (or writes `null`)
+    /// and the table gives no number (required, or described in words).
     pub fn opt_number(&mut self, key: &str) -> Result<Option<f64>, Diagnostic> {
         match self.raw(key) {
             Some(v) if v.kind != Kind::Null => self.number_value(key, v).map(Some),
-            _ => Ok(None),
+            _ => match self.default_of(key) {
+                ParamDefault::Number(x) => Ok(Some(x)),
+                ParamDefault::Required | ParamDefault::Described(_) => Ok(None),
+                ParamDefault::Numbers(_) | ParamDefault::Flag(_) | ParamDefault::Word(_) => {
+                    Err(self.default_mismatch(key, "a number"))
+                }
+            },
         }
     }
 
+    /// A number with a default the block derives (from another parameter,
+    /// the sample time) when neither the graph nor the table gives one.
     pub fn number_or(&mut self, key: &str, default: f64) -> Result<f64, Diagnostic> {
         Ok(self.opt_number(key)?.unwrap_or(default))
     }
 
-    /// A number that must satisfy `ok`, else an error saying `requirement`.
+    /// A number that must satisfy `ok`, else an error saying `requirement`;
+    /// `default` is a derived default ([`Params::number_or`]), `None` for
+    /// the table's.
     pub fn number_where(
         &mut self,
         key: &str,
@@ -169,7 +206,7 @@ impl<'a> Params<'a> {
     /// discrete form (default continuous): the sample time and, when
     /// discrete, its period.
     pub fn continuous_or_discrete(&mut self) -> Result<(SampleTime, Option<f64>), Diagnostic> {
-        match self.sample_time(SampleTime::Continuous)? {
+        match self.sample_time()? {
             st @ SampleTime::Continuous => Ok((st, None)),
             st @ SampleTime::Discrete { period, .. } => Ok((st, Some(period))),
             other => {
@@ -178,10 +215,21 @@ impl<'a> Params<'a> {
         }
     }
 
-    /// A whole number from 1 to `max`: every size-like parameter has a
-    /// stated bound, checked before anything is allocated.
+    /// A whole number from 1 to `max` (default: the table's): every
+    /// size-like parameter has a stated bound, checked before anything is
+    /// allocated.
+    pub fn count(&mut self, key: &str, max: usize) -> Result<usize, Diagnostic> {
+        let v = self.number(key)?;
+        self.checked_count(key, v, max)
+    }
+
+    /// [`Params::count`] with a derived default.
     pub fn count_or(&mut self, key: &str, default: usize, max: usize) -> Result<usize, Diagnostic> {
         let v = self.number_or(key, default as f64)?;
+        self.checked_count(key, v, max)
+    }
+
+    fn checked_count(&self, key: &str, v: f64, max: usize) -> Result<usize, Diagnostic> {
         if v >= 1.0 && v.fract() == 0.0 && v <= max as f64 {
             Ok(v as usize)
         } else {
@@ -191,16 +239,20 @@ impl<'a> Params<'a> {
 
     /// A list of numbers (a single number is a list of one).
     pub fn vector(&mut self, key: &str) -> Result<Vec<f64>, Diagnostic> {
-        match self.raw(key) {
-            Some(v) => self.vector_value(key, v),
-            None => Err(self.missing(key)),
-        }
+        self.opt_vector(key)?.ok_or_else(|| self.missing(key))
     }
 
+    /// A list of numbers, else the table's default (a number is a list of
+    /// one); `None` when the table gives none.
     pub fn opt_vector(&mut self, key: &str) -> Result<Option<Vec<f64>>, Diagnostic> {
         match self.raw(key) {
             Some(v) if v.kind != Kind::Null => self.vector_value(key, v).map(Some),
-            _ => Ok(None),
+            _ => match self.default_of(key) {
+                ParamDefault::Number(x) => Ok(Some(vec![x])),
+                ParamDefault::Numbers(xs) => Ok(Some(xs.to_vec())),
+                ParamDefault::Required | ParamDefault::Described(_) => Ok(None),
+                ParamDefault::Flag(_) | ParamDefault::Word(_) => Err(self.default_mismatch(key, "numbers")),
+            },
         }
     }
 
@@ -301,9 +353,17 @@ impl<'a> Params<'a> {
         Ok(out)
     }
 
+    /// A string: the graph's, else the table's word; `None` when the table
+    /// gives none (required, or described in words).
     pub fn opt_string(&mut self, key: &str) -> Result<Option<&'a str>, Diagnostic> {
         match self.raw(key) {
-            None => Ok(None),
+            None => match self.default_of(key) {
+                ParamDefault::Word(w) => Ok(Some(w)),
+                ParamDefault::Required | ParamDefault::Described(_) => Ok(None),
+                ParamDefault::Number(_) | ParamDefault::Numbers(_) | ParamDefault::Flag(_) => {
+                    Err(self.default_mismatch(key, "a string"))
+                }
+            },
             Some(v) => match &v.kind {
                 Kind::Str(s) => Ok(Some(s)),
                 _ => Err(self.error(key, format!("expected a string, found {}", v.describe()))),
@@ -315,16 +375,39 @@ impl<'a> Params<'a> {
         self.opt_string(key)?.ok_or_else(|| self.missing(key))
     }
 
-    /// One of `options` (the first is the default).
+    /// One of `options`; the default is the table's word (for a block
+    /// without a table, the first option).
     pub fn choice(&mut self, key: &str, options: &[&'static str]) -> Result<&'static str, Diagnostic> {
-        let Some(s) = self.opt_string(key)? else {
-            return Ok(options[0]);
+        let given = self.has(key);
+        let s = match self.opt_string(key)? {
+            Some(s) => s,
+            None if self.docs.is_empty() => return Ok(options[0]),
+            None => return Err(self.missing(key)),
         };
         options.iter().copied().find(|o| *o == s).ok_or_else(|| {
-            self.error(key, format!("`{s}` is not one of: {}", options.join(", "))).suggest(s, options.iter().copied())
+            if given {
+                self.error(key, format!("`{s}` is not one of: {}", options.join(", ")))
+                    .suggest(s, options.iter().copied())
+            } else {
+                self.default_mismatch(key, &format!("one of {}", options.join(", ")))
+            }
         })
     }
 
+    /// A flag: the graph's, else the table's.
+    pub fn flag(&mut self, key: &str) -> Result<bool, Diagnostic> {
+        match self.default_of(key) {
+            ParamDefault::Flag(default) => self.bool_or(key, default),
+            ParamDefault::Required => match self.raw(key) {
+                Some(_) => self.bool_or(key, false),
+                None => Err(self.missing(key)),
+            },
+            _ => Err(self.default_mismatch(key, "a flag")),
+        }
+    }
+
+    /// A flag with `default` when the graph leaves it out (for blocks
+    /// without a table; those with one use [`Params::flag`]).
     pub fn bool_or(&mut self, key: &str, default: bool) -> Result<bool, Diagnostic> {
         match self.raw(key) {
             None => Ok(default),
@@ -354,10 +437,16 @@ impl<'a> Params<'a> {
 
     /// The `sample_time` parameter: 0 continuous, -1 inherited, `inf`
     /// constant, T > 0 discrete, or `[T, offset]` with 0 ≤ offset < T.
-    pub fn sample_time(&mut self, default: SampleTime) -> Result<SampleTime, Diagnostic> {
+    /// Left out, it is the table's (inherited for a block without one).
+    pub fn sample_time(&mut self) -> Result<SampleTime, Diagnostic> {
         let key = "sample_time";
         let Some(v) = self.raw(key) else {
-            return Ok(default);
+            return match self.default_of(key) {
+                _ if self.docs.is_empty() => Ok(SampleTime::Inherited),
+                ParamDefault::Number(period) => self.sample_time_of(period, 0.0),
+                ParamDefault::Required => Err(self.missing(key)),
+                _ => Err(self.default_mismatch(key, "a sample time")),
+            };
         };
         let (period, offset) = match &v.kind {
             Kind::Seq(items) if items.len() == 2 => {
@@ -367,6 +456,22 @@ impl<'a> Params<'a> {
             Kind::Seq(_) => return Err(self.error(key, "expected a period or [period, offset]")),
             _ => (self.number_value(key, v)?, 0.0),
         };
+        self.sample_time_of(period, offset)
+    }
+
+    /// [`Params::sample_time`] for a block whose default sample time it
+    /// derives (the table describes it in words): `derived` when the graph
+    /// leaves it out.
+    pub fn sample_time_or(&mut self, derived: SampleTime) -> Result<SampleTime, Diagnostic> {
+        match self.default_of("sample_time") {
+            ParamDefault::Described(_) if !self.has("sample_time") => Ok(derived),
+            _ => self.sample_time(),
+        }
+    }
+
+    /// The sample time a period and offset stand for.
+    fn sample_time_of(&self, period: f64, offset: f64) -> Result<SampleTime, Diagnostic> {
+        let key = "sample_time";
         let hint = "0 = continuous, -1 = inherited, T > 0 = every T seconds, [T, offset] with 0 <= offset < T";
         match period {
             p if p == 0.0 && offset == 0.0 => Ok(SampleTime::Continuous),
@@ -390,7 +495,7 @@ impl<'a> Params<'a> {
         if !self.has("sample_time") {
             return Err(self.missing("sample_time"));
         }
-        match self.sample_time(SampleTime::Inherited)? {
+        match self.sample_time()? {
             st @ SampleTime::Discrete { period, offset } => Ok((st, period, offset)),
             other => Err(self
                 .error("sample_time", format!("this block is discrete: needs a period T > 0, got {other}"))

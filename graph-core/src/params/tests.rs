@@ -1,0 +1,106 @@
+//! The parameter table as the parser reads it: a parameter left out takes
+//! the table's default, of the kind the block asks for.
+
+use super::{ParamDefault::*, ParamDoc, Params};
+use crate::block::SampleTime;
+
+const TABLE: &[ParamDoc] = &[
+    ParamDoc::new("gain", Number(2.5), "a gain"),
+    ParamDoc::new("tau", Required, "a time constant").unit("s"),
+    ParamDoc::new("initial", Numbers(&[1.0, -1.0]), "x(0)"),
+    ParamDoc::new("mode", Word("fast"), "fast | slow"),
+    ParamDoc::new("hold", Flag(true), "hold the input"),
+    ParamDoc::new("h0", Described("2·sample_time"), "a filter factor"),
+    ParamDoc::new("sample_time", Number(0.0), "0 continuous, T > 0 discrete"),
+];
+
+/// Runs `f` on the parameters of a block `b` of a type with `TABLE`,
+/// written `{ type: t, <written> }`.
+fn with<R>(written: &str, table: &'static [ParamDoc], f: impl FnOnce(&mut Params) -> R) -> R {
+    let text = format!("blocks:\n  b: {{ type: t, {written} }}\n");
+    let flat = crate::load_str(&text, "t.yaml".into(), &[]).unwrap_or_else(|d| panic!("{d}"));
+    let b = &flat.blocks[0];
+    let mut p = Params::new("b", "t", &b.spec.pos, &b.spec.params, &b.scope, &b.dir, table);
+    f(&mut p)
+}
+
+#[test]
+fn a_parameter_left_out_takes_the_tables_default_of_the_kind_asked() {
+    with("tau: 0.1", TABLE, |p| {
+        assert_eq!(p.number("gain").unwrap(), 2.5);
+        assert_eq!(p.vector("initial").unwrap(), vec![1.0, -1.0]);
+        assert_eq!(p.choice("mode", &["slow", "fast"]).unwrap(), "fast");
+        assert!(p.flag("hold").unwrap());
+        assert_eq!(p.sample_time().unwrap(), SampleTime::Continuous);
+        // A number default is a list of one where a list is asked for.
+        assert_eq!(p.vector("gain").unwrap(), vec![2.5]);
+        assert_eq!(p.number("tau").unwrap(), 0.1);
+    });
+}
+
+#[test]
+fn a_parameter_written_overrides_the_default() {
+    with("tau: 1, gain: -3, initial: [4, 5], mode: slow, hold: false, sample_time: 0.01", TABLE, |p| {
+        assert_eq!(p.number("gain").unwrap(), -3.0);
+        assert_eq!(p.vector("initial").unwrap(), vec![4.0, 5.0]);
+        assert_eq!(p.choice("mode", &["slow", "fast"]).unwrap(), "slow");
+        assert!(!p.flag("hold").unwrap());
+        assert_eq!(p.sample_time().unwrap(), SampleTime::Discrete { period: 0.01, offset: 0.0 });
+    });
+}
+
+#[test]
+fn a_required_parameter_left_out_is_an_error_naming_it() {
+    with("gain: 1", TABLE, |p| {
+        let e = p.number("tau").unwrap_err();
+        assert!(e.message.contains("missing parameter `tau`"), "{}", e.message);
+        assert_eq!(e.hint.as_deref(), Some("see `ctlgraph blocks t`"));
+        assert_eq!(p.opt_number("tau").unwrap(), None);
+    });
+}
+
+#[test]
+fn a_described_default_is_left_to_the_block() {
+    with("", TABLE, |p| {
+        assert_eq!(p.opt_number("h0").unwrap(), None);
+        assert_eq!(p.number_or("h0", 0.02).unwrap(), 0.02);
+        // A derived default does not hide the table's value where there is one.
+        assert_eq!(p.number_or("gain", 7.0).unwrap(), 2.5);
+    });
+}
+
+#[test]
+fn a_block_asking_for_another_kind_than_its_table_gives_gets_an_internal_error() {
+    with("", TABLE, |p| {
+        let e = p.number("mode").unwrap_err();
+        assert!(e.message.contains("internal error") && e.message.contains("`fast`"), "{}", e.message);
+        assert!(p.flag("gain").unwrap_err().message.contains("as a flag"));
+        assert!(p.opt_string("gain").unwrap_err().message.contains("as a string"));
+    });
+}
+
+#[test]
+fn a_block_without_a_table_gives_its_own_defaults() {
+    with("", &[], |p| {
+        assert_eq!(p.number_or("k", 4.0).unwrap(), 4.0);
+        assert!(p.number("k").is_err());
+        assert_eq!(p.choice("mode", &["a", "b"]).unwrap(), "a");
+        assert_eq!(p.sample_time().unwrap(), SampleTime::Inherited);
+    });
+}
+
+#[test]
+#[cfg(debug_assertions)]
+#[should_panic(expected = "reads parameter `gian`, which its parameter table does not list")]
+fn a_block_reading_a_key_its_table_does_not_list_stops_a_debug_build() {
+    with("", TABLE, |p| {
+        let _ = p.opt_number("gian");
+    })
+}
+
+#[test]
+fn the_documentation_prints_each_default_as_a_graph_writes_it() {
+    let shown: Vec<String> = TABLE.iter().map(|d| d.default.to_string()).collect();
+    assert_eq!(shown, ["2.5", "required", "[1, -1]", "fast", "true", "2·sample_time", "0"]);
+    assert_eq!(TABLE[1].unit, "s");
+}
