@@ -295,6 +295,7 @@ fn every_block_of_every_registered_type_keeps_its_promises() {
         let model = ctlgraph::compile_file(graph, &[]).unwrap_or_else(|d| panic!("{}: {d}", graph.display()));
         seen.extend(model.meta.iter().map(|m| m.type_name.clone()));
         broken.extend(check_model(&model).into_iter().map(|b| format!("{}: {b}", graph.display())));
+        broken.extend(undocumented_ports(&model).into_iter().map(|b| format!("{}: {b}", graph.display())));
     }
     assert!(broken.is_empty(), "{}", broken.join("\n"));
     let registry = ctlgraph::registry();
@@ -302,4 +303,34 @@ fn every_block_of_every_registered_type_keeps_its_promises() {
     let structural = ["subsystem", "inport", "outport"];
     let unchecked: Vec<&str> = registry.names().filter(|n| !seen.contains(*n) && !structural.contains(n)).collect();
     assert!(unchecked.is_empty(), "no checked graph has a block of type {unchecked:?}");
+}
+
+/// The ports of `model`'s blocks that their type's documentation does not
+/// name: each built port must be one the type's port table lists (a name
+/// written `u1 … un` stands for its numbered family, one in parentheses
+/// for ports the graph names, as a fuzzy system's). The table and the
+/// constructor both name ports; this keeps them saying the same.
+fn undocumented_ports(model: &ctlgraph::core::Model) -> Vec<String> {
+    let registry = ctlgraph::registry();
+    let documented = |docs: &[ctlgraph::core::PortDoc], name: &str| {
+        docs.iter().any(|d| {
+            d.name == name
+                || d.name.starts_with('(')
+                || d.name.split(|c: char| c == ',' || c.is_whitespace()).any(|n| n == name)
+                || (d.name.contains('…') && {
+                    let stem: String = d.name.chars().take_while(|c| c.is_alphabetic()).collect();
+                    name.strip_prefix(stem.as_str()).is_some_and(|k| k.chars().all(|c| c.is_ascii_digit()))
+                })
+        })
+    };
+    let mut missing = Vec::new();
+    for m in &model.meta {
+        let Some(t) = registry.get(&m.type_name) else { continue };
+        for (side, names, docs) in [("input", &m.input_names, t.inputs), ("output", &m.output_names, t.outputs)] {
+            for name in names.iter().filter(|n| !documented(docs, n)) {
+                missing.push(format!("block `{}` ({}): {side} `{name}` is not in its port table", m.name, m.type_name));
+            }
+        }
+    }
+    missing
 }
