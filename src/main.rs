@@ -441,7 +441,7 @@ fn blocks(ty: Option<&str>) -> Result<(), Failure> {
             ctlgraph_core::ParamDefault::Required => "required".to_string(),
             value => format!("default {value}"),
         };
-        println!("  {:<14} {:<18} {}", p.name, default, ctlgraph::reference::doc_text(p));
+        println!("  {:<14} {:<11} {:<18} {}", p.name, p.kind.name(), default, ctlgraph::reference::doc_text(p));
     }
     Ok(())
 }

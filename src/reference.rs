@@ -38,14 +38,21 @@ pub fn markdown(reg: &Registry) -> String {
                 out.push_str("Parameters: none.\n");
                 continue;
             }
-            out.push_str("| parameter | default | unit | |\n|---|---|---|---|\n");
+            out.push_str("| parameter | kind | default | unit | |\n|---|---|---|---|---|\n");
             for p in t.params {
                 let default = match p.default {
                     ParamDefault::Required => "required".to_string(),
                     ParamDefault::Described(words) => cell(words),
                     value => format!("`{}`", cell(&value.to_string())),
                 };
-                let _ = writeln!(out, "| `{}` | {default} | {} | {} |", p.name, cell(p.unit), cell(p.doc));
+                let _ = writeln!(
+                    out,
+                    "| `{}` | {} | {default} | {} | {} |",
+                    p.name,
+                    p.kind.name(),
+                    cell(p.unit),
+                    cell(p.doc)
+                );
             }
         }
     }

@@ -32,11 +32,14 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[PortDoc { name: "r", doc: "reference (scalar)" }],
         outputs: &[PortDoc { name: "r1", doc: "tracked reference" }, PortDoc { name: "r2", doc: "its derivative" }],
         params: &[
-            param("delta", Required, "speed factor δ > 0: largest |dr2/dt|").unit("units/s²"),
+            param("delta", Required, "speed factor δ > 0: largest |dr2/dt|").kind(ParamKind::Number).unit("units/s²"),
             param("h0", Described("2·sample_time"), "filter factor h0 > 0; >= 2·sample_time avoids overshoot")
+                .kind(ParamKind::Number)
                 .unit("s"),
             param("form", Word("fst"), "fst (Han's, c = x1 + h0·x2) | paper (eq. 7 as printed, c = x1 + h·x2) | fhan"),
-            param("c_step", Described("h0"), "the step in c = x1 + c_step·x2 of fst (paper: h); > 0").unit("s"),
+            param("c_step", Described("h0"), "the step in c = x1 + c_step·x2 of fst (paper: h); > 0")
+                .kind(ParamKind::Number)
+                .unit("s"),
             param("initial", Number(0.0), "r1(0)"),
             crate::SAMPLE_TIME_REQUIRED,
         ],
@@ -61,11 +64,12 @@ pub const TYPES: &[BlockType] = &[
         outputs: &[PortDoc { name: "z", doc: "estimates [y, y', …, f], width n+1" }],
         params: &[
             param("order", Number(2.0), "plant order n (1, 2 or 3)"),
-            param("omega", Required, "observer bandwidth ω (or give `beta`)").unit("rad/s"),
-            param("beta", Required, "explicit gains [β1 … β_{n+1}] instead of ω"),
-            param("b0", Required, "input gain estimate b0"),
+            param("omega", Required, "observer bandwidth ω (or give `beta`)").kind(ParamKind::Number).unit("rad/s"),
+            param("beta", Required, "explicit gains [β1 … β_{n+1}] instead of ω").kind(ParamKind::Numbers),
+            param("b0", Required, "input gain estimate b0").kind(ParamKind::Number),
             param("initial", Number(0.0), "z(0): a number or n+1 numbers"),
-            param("sample_time", Number(0.0), "0 continuous, h > 0 discrete (forward Euler)"),
+            param("sample_time", Number(0.0), "0 continuous, h > 0 discrete (forward Euler)")
+                .kind(ParamKind::SampleTime),
         ],
         build: build_leso,
     },
@@ -87,12 +91,13 @@ pub const TYPES: &[BlockType] = &[
         ],
         outputs: &[PortDoc { name: "u", doc: "control signal" }],
         params: &[
-            param("alpha", Required, "[α1, α2] (order 2) or [α1] (order 1)"),
-            param("b0", Required, "input gain estimate, as in the LESO"),
+            param("alpha", Required, "[α1, α2] (order 2) or [α1] (order 1)").kind(ParamKind::Numbers),
+            param("b0", Required, "input gain estimate, as in the LESO").kind(ParamKind::Number),
             param("order", Number(2.0), "plant order (1 or 2)"),
             param("lower", Number(f64::NEG_INFINITY), "lower output limit"),
             param("upper", Number(f64::INFINITY), "upper output limit"),
-            param("gain_inputs", Described("[]"), "gains read from ports each step: alpha1, alpha2"),
+            param("gain_inputs", Described("[]"), "gains read from ports each step: alpha1, alpha2")
+                .kind(ParamKind::Words),
             crate::SAMPLE_TIME_INHERITED,
         ],
         build: build_lsef,

@@ -59,7 +59,7 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
-            param("delay", Required, "dead time, >= 0").unit("s"),
+            param("delay", Required, "dead time, >= 0").kind(ParamKind::Number).unit("s"),
             HISTORY_PARAMS[0],
             HISTORY_PARAMS[1],
             HISTORY_PARAMS[2],
@@ -80,7 +80,7 @@ pub const TYPES: &[BlockType] = &[
         inputs: &[PortDoc { name: "u", doc: "any width" }, PortDoc { name: "delay", doc: "τ(t) [s], scalar" }],
         outputs: Y_SAME,
         params: &[
-            param("max_delay", Required, "largest delay, > 0").unit("s"),
+            param("max_delay", Required, "largest delay, > 0").kind(ParamKind::Number).unit("s"),
             HISTORY_PARAMS[0],
             HISTORY_PARAMS[1],
             HISTORY_PARAMS[2],

@@ -20,8 +20,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_SCALAR,
         outputs: Y_SCALAR,
         params: &[
-            param("num", Required, "numerator, descending powers of z"),
-            param("den", Required, "denominator, descending powers of z"),
+            param("num", Required, "numerator, descending powers of z").kind(ParamKind::Numbers),
+            param("den", Required, "denominator, descending powers of z").kind(ParamKind::Numbers),
             SAMPLE_TIME_REQUIRED,
         ],
         build: build_dtf,

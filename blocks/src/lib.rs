@@ -4,7 +4,7 @@
 //! equations in its `BlockType` entry; `ctlgraph blocks TYPE` prints them.
 
 use ctlgraph_core::ParamDefault::{Described, Number, Required};
-use ctlgraph_core::registry::{ParamDefault, ParamDoc, PortDoc, Registry};
+use ctlgraph_core::registry::{ParamDefault, ParamDoc, ParamKind, PortDoc, Registry};
 
 /// A block's [`Block::rust_type`](ctlgraph_core::Block::rust_type): its
 /// path as generated code names it, from the module that defines it.
@@ -116,6 +116,7 @@ pub(crate) const fn param(name: &'static str, default: ParamDefault, doc: &'stat
 pub(crate) mod table {
     pub(crate) use super::param;
     pub(crate) use ctlgraph_core::ParamDefault::{Described, Flag, Number, Numbers, Required, Word};
+    pub(crate) use ctlgraph_core::ParamKind;
 }
 
 /// An input of any width, and an output of the same width.
@@ -127,19 +128,23 @@ pub(crate) const Y_SCALAR: &[PortDoc] = &[PortDoc { name: "y", doc: "scalar" }];
 
 /// The `sample_time` parameter of blocks that inherit their rate by default.
 pub(crate) const SAMPLE_TIME_INHERITED: ParamDoc =
-    param("sample_time", Number(-1.0), "-1 inherit from inputs, 0 continuous, T > 0 every T seconds, [T, offset]");
+    param("sample_time", Number(-1.0), "-1 inherit from inputs, 0 continuous, T > 0 every T seconds, [T, offset]")
+        .kind(ParamKind::SampleTime);
 
 /// The optional active window of every source.
 pub(crate) const ACTIVE: ParamDoc =
-    param("active", Described("always"), "[t_on, t_off]: the source outputs zero before t_on and from t_off on");
+    param("active", Described("always"), "[t_on, t_off]: the source outputs zero before t_on and from t_off on")
+        .kind(ParamKind::Numbers);
 
 /// The `sample_time` parameter of sources, continuous by default.
 pub(crate) const SAMPLE_TIME_CONTINUOUS: ParamDoc =
-    param("sample_time", Number(0.0), "0 continuous, T > 0 sampled every T seconds and held, [T, offset]");
+    param("sample_time", Number(0.0), "0 continuous, T > 0 sampled every T seconds and held, [T, offset]")
+        .kind(ParamKind::SampleTime);
 
 /// The `sample_time` parameter of blocks that only exist in discrete form.
 pub(crate) const SAMPLE_TIME_REQUIRED: ParamDoc =
-    param("sample_time", Required, "period T > 0 in seconds, or [T, offset] with 0 <= offset < T");
+    param("sample_time", Required, "period T > 0 in seconds, or [T, offset] with 0 <= offset < T")
+        .kind(ParamKind::SampleTime);
 
 #[cfg(test)]
 mod tests {

@@ -122,7 +122,8 @@ pub const TYPES: &[BlockType] = &[
                 "sample_time",
                 Described("0 when expr reads t, else -1"),
                 "-1 inherit from inputs, 0 continuous, T > 0 every T seconds, [T, offset]",
-            ),
+            )
+            .kind(ParamKind::SampleTime),
         ],
         build: build_fcn,
     },

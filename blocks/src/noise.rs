@@ -13,7 +13,8 @@ use rand_chacha::rand_core::{Rng, SeedableRng};
 const SEED: ctlgraph_core::ParamDoc =
     param("seed", Number(0.0), "mixed with the graph seed and the block name into this block's stream");
 const SAMPLE_TIME: ctlgraph_core::ParamDoc =
-    param("sample_time", Required, "period T > 0 at which a new value is drawn and then held");
+    param("sample_time", Required, "period T > 0 at which a new value is drawn and then held")
+        .kind(ParamKind::SampleTime);
 
 pub const TYPES: &[BlockType] = &[
     BlockType {

@@ -70,7 +70,7 @@ pub const TYPES: &[BlockType] = &[
             param("rising", Number(1.0), "largest rate of increase, > 0").unit("units/s"),
             param("falling", Number(-1.0), "most negative rate, < 0").unit("units/s"),
             param("initial", Number(0.0), "output at t = 0"),
-            param("sample_time", Number(0.0), "0 continuous, T > 0 discrete"),
+            param("sample_time", Number(0.0), "0 continuous, T > 0 discrete").kind(ParamKind::SampleTime),
         ],
         build: build_rate_limiter,
     },

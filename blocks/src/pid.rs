@@ -37,8 +37,9 @@ pub const TYPES: &[BlockType] = &[BlockType {
         param("anti_windup", Word("clamping"), "clamping | back_calculation | none"),
         param("kb", Number(1.0), "back-calculation gain").unit("1/s"),
         param("initial", Number(0.0), "initial integrator output I(0)"),
-        param("gain_inputs", Described("[]"), "gains read from input ports each step: any of kp, ki, kd"),
-        param("sample_time", Number(0.0), "0 continuous, T > 0 discrete"),
+        param("gain_inputs", Described("[]"), "gains read from input ports each step: any of kp, ki, kd")
+            .kind(ParamKind::Words),
+        param("sample_time", Number(0.0), "0 continuous, T > 0 discrete").kind(ParamKind::SampleTime),
     ],
     build: build_pid,
 }];

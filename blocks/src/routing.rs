@@ -16,7 +16,7 @@ pub const TYPES: &[BlockType] = &[
         outputs: &[PortDoc { name: "y", doc: "width = sum of the input widths" }],
         params: &[
             param("inputs", Number(2.0), "number of scalar inputs (when `widths` is not given)"),
-            param("widths", Required, "width of each input, e.g. [2, 1]"),
+            param("widths", Required, "width of each input, e.g. [2, 1]").kind(ParamKind::Numbers),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_mux,
@@ -30,7 +30,7 @@ pub const TYPES: &[BlockType] = &[
         outputs: &[PortDoc { name: "y1 … yn", doc: "widths as given" }],
         params: &[
             param("outputs", Number(2.0), "number of scalar outputs (when `widths` is not given)"),
-            param("widths", Required, "width of each output"),
+            param("widths", Required, "width of each output").kind(ParamKind::Numbers),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_demux,
@@ -42,7 +42,10 @@ pub const TYPES: &[BlockType] = &[
         doc: "y[i] = u[indices[i]], indices counted from 1 (as MATLAB); repeats allowed.",
         inputs: &[PortDoc { name: "u", doc: "any width >= the largest index" }],
         outputs: &[PortDoc { name: "y", doc: "width = number of indices" }],
-        params: &[param("indices", Required, "list of 1-based indices"), SAMPLE_TIME_INHERITED],
+        params: &[
+            param("indices", Required, "list of 1-based indices").kind(ParamKind::Numbers),
+            SAMPLE_TIME_INHERITED,
+        ],
         build: build_selector,
     },
     BlockType {
@@ -78,7 +81,7 @@ pub const TYPES: &[BlockType] = &[
         outputs: &[PortDoc { name: "(outports)", doc: "one per outport block of the file" }],
         params: &[
             param("file", Required, "graph file, relative to this one"),
-            param("parameters", Described("{}"), "overrides of the subsystem's parameters"),
+            param("parameters", Described("{}"), "overrides of the subsystem's parameters").kind(ParamKind::Structure),
         ],
         build: structural,
     },

@@ -15,8 +15,8 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
-            param("x", Required, "breakpoints, strictly increasing, at least two"),
-            param("y", Required, "table values, one per breakpoint"),
+            param("x", Required, "breakpoints, strictly increasing, at least two").kind(ParamKind::Numbers),
+            param("y", Required, "table values, one per breakpoint").kind(ParamKind::Numbers),
             param("extrapolation", Word("clamp"), "clamp | linear"),
             SAMPLE_TIME_INHERITED,
         ],

@@ -5,7 +5,7 @@
 use crate::block::{Block, Interface};
 use crate::diag::Diagnostic;
 use crate::params::Params;
-pub use crate::params::{ParamDefault, ParamDoc};
+pub use crate::params::{ParamDefault, ParamDoc, ParamKind};
 use std::collections::BTreeMap;
 
 /// A port, as documented.

@@ -39,9 +39,12 @@ pub const TYPES: &[BlockType] = &[BlockType {
     inputs: &[PortDoc { name: "(inputs)", doc: "one scalar port per input variable" }],
     outputs: &[PortDoc { name: "(outputs)", doc: "one scalar port per output variable" }],
     params: &[
-        param("inputs", Required, "mapping name -> { range: [lo, hi], terms: N or { term: [mf, …] } }"),
-        param("outputs", Required, "the same for outputs (Sugeno: terms map names to constants)"),
-        param("rules", Required, "mapping output -> table, or a list of `if … then …` sentences"),
+        param("inputs", Required, "mapping name -> { range: [lo, hi], terms: N or { term: [mf, …] } }")
+            .kind(ParamKind::Structure),
+        param("outputs", Required, "the same for outputs (Sugeno: terms map names to constants)")
+            .kind(ParamKind::Structure),
+        param("rules", Required, "mapping output -> table, or a list of `if … then …` sentences")
+            .kind(ParamKind::Structure),
         param("kind", Word("mamdani"), "mamdani | sugeno"),
         param("and", Word("min"), "min | product"),
         param("or", Word("max"), "max | probor"),

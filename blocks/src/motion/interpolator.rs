@@ -27,7 +27,7 @@ pub const PATH_INTERPOLATOR: BlockType = BlockType {
     ],
     outputs: &[PortDoc { name: "u", doc: "path parameter u_j in [0, 1]" }],
     params: &[
-        param("sample_time", Required, "interpolation period Tc (required)").unit("s"),
+        param("sample_time", Required, "interpolation period Tc (required)").kind(ParamKind::SampleTime).unit("s"),
         param("initial", Number(0.0), "u at the start, in [0, 1]"),
     ],
     build: build_path_interpolator,

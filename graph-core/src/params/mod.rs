@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 mod table;
 #[cfg(test)]
 mod tests;
-pub use table::{ParamDefault, ParamDoc};
+pub use table::{ParamDefault, ParamDoc, ParamKind};
 
 /// A block's parameters as written, with the scope their expressions see.
 pub struct Params<'a> {
@@ -114,6 +114,20 @@ impl<'a> Params<'a> {
         entry
     }
 
+    /// Checks (in a debug build) that the table declares `key` of one of
+    /// `kinds`, the ones the accessor reading it accepts.
+    fn expect_kind(&self, key: &str, kinds: &[ParamKind]) {
+        if let Some(entry) = self.declared(key) {
+            debug_assert!(
+                kinds.contains(&entry.kind),
+                "block type `{}` reads parameter `{key}` as {:?}, but its table declares it {:?}",
+                self.type_name,
+                kinds,
+                entry.kind
+            );
+        }
+    }
+
     /// What the table gives `key` when the graph leaves it out (required
     /// for a block without a table).
     fn default_of(&self, key: &str) -> ParamDefault {
@@ -162,6 +176,7 @@ impl<'a> Params<'a> {
     /// A number, or `None` when the graph leaves it out (or writes `null`)
     /// and the table gives no number (required, or described in words).
     pub fn opt_number(&mut self, key: &str) -> Result<Option<f64>, Diagnostic> {
+        self.expect_kind(key, &[ParamKind::Number]);
         match self.raw(key) {
             Some(v) if v.kind != Kind::Null => self.number_value(key, v).map(Some),
             _ => match self.default_of(key) {
@@ -245,6 +260,7 @@ impl<'a> Params<'a> {
     /// A list of numbers, else the table's default (a number is a list of
     /// one); `None` when the table gives none.
     pub fn opt_vector(&mut self, key: &str) -> Result<Option<Vec<f64>>, Diagnostic> {
+        self.expect_kind(key, &[ParamKind::Number, ParamKind::Numbers]);
         match self.raw(key) {
             Some(v) if v.kind != Kind::Null => self.vector_value(key, v).map(Some),
             _ => match self.default_of(key) {
@@ -282,6 +298,7 @@ impl<'a> Params<'a> {
 
     /// A matrix as a list of rows; a list of numbers is one row, a number a 1×1.
     pub fn matrix(&mut self, key: &str) -> Result<Vec<Vec<f64>>, Diagnostic> {
+        self.expect_kind(key, &[ParamKind::Number, ParamKind::Numbers, ParamKind::Matrix]);
         let Some(v) = self.raw(key) else {
             return Err(self.missing(key));
         };
@@ -297,6 +314,7 @@ impl<'a> Params<'a> {
     /// A polynomial as a list of coefficients, or a product of polynomials
     /// as a list of such lists (one factor each).
     pub fn polynomial_factors(&mut self, key: &str) -> Result<Vec<Vec<f64>>, Diagnostic> {
+        self.expect_kind(key, &[ParamKind::Number, ParamKind::Numbers, ParamKind::Matrix]);
         let Some(v) = self.raw(key) else {
             return Err(self.missing(key));
         };
@@ -311,6 +329,7 @@ impl<'a> Params<'a> {
     /// A list whose items are numbers or `[re, im]` pairs (a complex
     /// number, standing for itself and its conjugate).
     pub fn roots(&mut self, key: &str) -> Result<Vec<(f64, f64)>, Diagnostic> {
+        self.expect_kind(key, &[ParamKind::Number, ParamKind::Numbers]);
         let Some(v) = self.raw(key) else {
             return Ok(Vec::new());
         };
@@ -356,6 +375,7 @@ impl<'a> Params<'a> {
     /// A string: the graph's, else the table's word; `None` when the table
     /// gives none (required, or described in words).
     pub fn opt_string(&mut self, key: &str) -> Result<Option<&'a str>, Diagnostic> {
+        self.expect_kind(key, &[ParamKind::Word, ParamKind::Text]);
         match self.raw(key) {
             None => match self.default_of(key) {
                 ParamDefault::Word(w) => Ok(Some(w)),
@@ -409,6 +429,7 @@ impl<'a> Params<'a> {
     /// A flag with `default` when the graph leaves it out (for blocks
     /// without a table; those with one use [`Params::flag`]).
     pub fn bool_or(&mut self, key: &str, default: bool) -> Result<bool, Diagnostic> {
+        self.expect_kind(key, &[ParamKind::Flag]);
         match self.raw(key) {
             None => Ok(default),
             Some(v) => match v.kind {
@@ -420,6 +441,7 @@ impl<'a> Params<'a> {
 
     /// A list of strings (a single string is a list of one).
     pub fn strings(&mut self, key: &str) -> Result<Vec<&'a str>, Diagnostic> {
+        self.expect_kind(key, &[ParamKind::Words, ParamKind::Word]);
         let Some(v) = self.raw(key) else {
             return Ok(Vec::new());
         };
@@ -440,6 +462,7 @@ impl<'a> Params<'a> {
     /// Left out, it is the table's (inherited for a block without one).
     pub fn sample_time(&mut self) -> Result<SampleTime, Diagnostic> {
         let key = "sample_time";
+        self.expect_kind(key, &[ParamKind::SampleTime]);
         let Some(v) = self.raw(key) else {
             return match self.default_of(key) {
                 _ if self.docs.is_empty() => Ok(SampleTime::Inherited),

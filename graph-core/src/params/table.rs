@@ -9,6 +9,7 @@
 #[derive(Clone, Copy, Debug)]
 pub struct ParamDoc {
     pub name: &'static str,
+    pub kind: ParamKind,
     pub default: ParamDefault,
     /// The unit of its value ("s", "rad/s", "mm"), or "" for none.
     pub unit: &'static str,
@@ -16,9 +17,22 @@ pub struct ParamDoc {
 }
 
 impl ParamDoc {
-    /// A parameter without a unit.
+    /// A parameter without a unit, of the kind its default is (text for
+    /// one required or described in words, until [`ParamDoc::kind`] says).
     pub const fn new(name: &'static str, default: ParamDefault, doc: &'static str) -> Self {
-        ParamDoc { name, default, unit: "", doc }
+        let kind = match default {
+            ParamDefault::Number(_) => ParamKind::Number,
+            ParamDefault::Numbers(_) => ParamKind::Numbers,
+            ParamDefault::Flag(_) => ParamKind::Flag,
+            ParamDefault::Word(_) => ParamKind::Word,
+            ParamDefault::Required | ParamDefault::Described(_) => ParamKind::Text,
+        };
+        ParamDoc { name, kind, default, unit: "", doc }
+    }
+
+    /// The same parameter, of `kind`.
+    pub const fn kind(self, kind: ParamKind) -> Self {
+        ParamDoc { kind, ..self }
     }
 
     /// The same parameter, its value in `unit`.
@@ -57,6 +71,47 @@ impl std::fmt::Display for ParamDefault {
             }
             ParamDefault::Flag(b) => write!(f, "{b}"),
             ParamDefault::Word(w) | ParamDefault::Described(w) => f.write_str(w),
+        }
+    }
+}
+
+/// What a parameter's value is, as a graph writes it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParamKind {
+    /// A number, or an expression of the graph's parameters.
+    Number,
+    /// A list of numbers (one number is a list of one).
+    Numbers,
+    /// A list of rows of numbers.
+    Matrix,
+    /// true or false.
+    Flag,
+    /// One of the block's named options.
+    Word,
+    /// Free text: a formula in the block's own variables, a file, a column.
+    Text,
+    /// A list of words or formulas.
+    Words,
+    /// 0 (continuous), -1 (inherited), T, [T, offset] or inf (constant).
+    SampleTime,
+    /// A structure the block reads itself (a fuzzy system's variables and
+    /// rules, a subsystem's parameter overrides).
+    Structure,
+}
+
+impl ParamKind {
+    /// The kind's name in the documentation.
+    pub fn name(self) -> &'static str {
+        match self {
+            ParamKind::Number => "number",
+            ParamKind::Numbers => "numbers",
+            ParamKind::Matrix => "matrix",
+            ParamKind::Flag => "flag",
+            ParamKind::Word => "word",
+            ParamKind::Text => "text",
+            ParamKind::Words => "words",
+            ParamKind::SampleTime => "sample time",
+            ParamKind::Structure => "structure",
         }
     }
 }

@@ -1,17 +1,17 @@
 //! The parameter table as the parser reads it: a parameter left out takes
 //! the table's default, of the kind the block asks for.
 
-use super::{ParamDefault::*, ParamDoc, Params};
+use super::{ParamDefault::*, ParamDoc, ParamKind, Params};
 use crate::block::SampleTime;
 
 const TABLE: &[ParamDoc] = &[
     ParamDoc::new("gain", Number(2.5), "a gain"),
-    ParamDoc::new("tau", Required, "a time constant").unit("s"),
+    ParamDoc::new("tau", Required, "a time constant").unit("s").kind(ParamKind::Number),
     ParamDoc::new("initial", Numbers(&[1.0, -1.0]), "x(0)"),
     ParamDoc::new("mode", Word("fast"), "fast | slow"),
     ParamDoc::new("hold", Flag(true), "hold the input"),
-    ParamDoc::new("h0", Described("2·sample_time"), "a filter factor"),
-    ParamDoc::new("sample_time", Number(0.0), "0 continuous, T > 0 discrete"),
+    ParamDoc::new("h0", Described("2·sample_time"), "a filter factor").kind(ParamKind::Number),
+    ParamDoc::new("sample_time", Number(0.0), "0 continuous, T > 0 discrete").kind(ParamKind::SampleTime),
 ];
 
 /// Runs `f` on the parameters of a block `b` of a type with `TABLE`,
@@ -69,14 +69,30 @@ fn a_described_default_is_left_to_the_block() {
     });
 }
 
+/// Tables whose defaults are not of the kind they declare.
+const MISMATCHED: &[ParamDoc] = &[
+    ParamDoc::new("mode", Word("fast"), "").kind(ParamKind::Number),
+    ParamDoc::new("gain", Number(1.0), "").kind(ParamKind::Flag),
+    ParamDoc::new("name", Number(1.0), "").kind(ParamKind::Text),
+];
+
 #[test]
-fn a_block_asking_for_another_kind_than_its_table_gives_gets_an_internal_error() {
-    with("", TABLE, |p| {
+fn a_default_of_another_kind_than_the_block_asks_for_is_an_internal_error() {
+    with("", MISMATCHED, |p| {
         let e = p.number("mode").unwrap_err();
         assert!(e.message.contains("internal error") && e.message.contains("`fast`"), "{}", e.message);
         assert!(p.flag("gain").unwrap_err().message.contains("as a flag"));
-        assert!(p.opt_string("gain").unwrap_err().message.contains("as a string"));
+        assert!(p.opt_string("name").unwrap_err().message.contains("as a string"));
     });
+}
+
+#[test]
+#[cfg(debug_assertions)]
+#[should_panic(expected = "reads parameter `mode` as [Number], but its table declares it Word")]
+fn a_block_reading_a_parameter_as_another_kind_than_its_table_declares_stops_a_debug_build() {
+    with("", TABLE, |p| {
+        let _ = p.number("mode");
+    })
 }
 
 #[test]
@@ -103,4 +119,6 @@ fn the_documentation_prints_each_default_as_a_graph_writes_it() {
     let shown: Vec<String> = TABLE.iter().map(|d| d.default.to_string()).collect();
     assert_eq!(shown, ["2.5", "required", "[1, -1]", "fast", "true", "2·sample_time", "0"]);
     assert_eq!(TABLE[1].unit, "s");
+    let kinds: Vec<&str> = TABLE.iter().map(|d| d.kind.name()).collect();
+    assert_eq!(kinds, ["number", "number", "numbers", "word", "flag", "number", "sample time"]);
 }
