@@ -1,6 +1,7 @@
-//! Runs a generated step: the simulator's time keeping (the fixed-step
-//! grid, clocks counted in ticks, block events, the exact-ZOH hold) around
-//! the generated sweeps, so both compute the same numbers to the bit.
+//! Runs a generated step: the driver's time keeping (`sim/driver.rs`: the
+//! grid, clocks counted in ticks, block events, the exact-ZOH hold, every
+//! solver) around the generated sweeps, so both back-ends compute the same
+//! numbers to the bit.
 
 use crate::block::{Breakpoint, Kernel, Port};
 use crate::compile::{BlockMeta, Model};

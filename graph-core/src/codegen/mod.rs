@@ -12,8 +12,8 @@
 //! the simulator, so a generated step computes what the interpreter
 //! computes, to the bit (tested on every bundled graph it accepts).
 //!
-//! Accepted: fixed-step solvers (euler, heun, rk4) and graphs without zero
-//! crossings or top-level inports. The interpreter runs the rest.
+//! Accepted: every solver, and graphs without zero crossings, rows between
+//! steps or top-level inports. The interpreter runs the rest.
 
 mod driver;
 mod emit;
@@ -29,9 +29,6 @@ pub use driver::{
 /// Why a model cannot be generated: one sentence per reason.
 pub fn refusals(model: &Model) -> Vec<String> {
     let mut why = Vec::new();
-    if model.sim.method.is_adaptive() {
-        why.push("the solver is adaptive: a generated step needs a fixed-step method (euler, heun or rk4)".to_string());
-    }
     for (meta, block) in model.meta.iter().zip(&model.blocks) {
         if block.needs_major_step() {
             why.push(format!(
