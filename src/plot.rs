@@ -172,11 +172,12 @@ fn quiet_corner(
     corners.into_iter().min_by_key(|&(_, x0, y0)| covered(x0, y0)).map_or(SeriesLabelPosition::UpperRight, |c| c.0)
 }
 
-/// `label [unit]`, or the label alone.
+/// `label [unit]`, or the label alone — also when the label already ends
+/// in that unit, as a scope's `y_label: "position [mm]"` does.
 fn with_unit(label: &str, unit: Option<&str>) -> String {
     match unit {
-        Some(u) => format!("{label} [{u}]"),
-        None => label.to_string(),
+        Some(u) if !label.trim_end().ends_with(&format!("[{u}]")) => format!("{label} [{u}]"),
+        _ => label.to_string(),
     }
 }
 
@@ -318,6 +319,14 @@ fn bucket_extremes(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_axis_label_names_its_unit_once() {
+        assert_eq!(with_unit("position", Some("mm")), "position [mm]");
+        assert_eq!(with_unit("position [mm]", Some("mm")), "position [mm]");
+        assert_eq!(with_unit("position [m]", Some("mm")), "position [m] [mm]");
+        assert_eq!(with_unit("u", None), "u");
+    }
 
     #[test]
     fn comparisons_share_a_panel() {

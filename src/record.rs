@@ -141,12 +141,16 @@ fn remove_stale(dest: &Path, name: &str) {
 }
 
 /// Where an output to `dest` really goes: through a symbolic link to its
-/// target (the link stays a link); never onto a device, FIFO or folder,
-/// nor over a read-only file (those are errors, not replaced).
+/// target (the link stays a link, also one whose target does not exist
+/// yet); never onto a device, FIFO or folder, nor over a read-only file
+/// (those are errors, not replaced).
 pub fn output_target(dest: &Path) -> std::io::Result<PathBuf> {
     use std::io::{Error, ErrorKind};
     let target = match std::fs::symlink_metadata(dest) {
-        Ok(m) if m.file_type().is_symlink() => std::fs::canonicalize(dest).unwrap_or_else(|_| dest.to_path_buf()),
+        Ok(m) if m.file_type().is_symlink() => match std::fs::canonicalize(dest) {
+            Ok(target) => target,
+            Err(_) => link_target(dest)?,
+        },
         _ => dest.to_path_buf(),
     };
     match std::fs::metadata(&target) {
@@ -156,6 +160,24 @@ pub fn output_target(dest: &Path) -> std::io::Result<PathBuf> {
         Ok(m) if m.permissions().readonly() => Err(Error::new(ErrorKind::PermissionDenied, "the file is read-only")),
         _ => Ok(target),
     }
+}
+
+/// The path a chain of symbolic links from `link` ends at, which need not
+/// exist (a dangling link's target is where the output is created).
+fn link_target(link: &Path) -> std::io::Result<PathBuf> {
+    let mut path = link.to_path_buf();
+    // As the kernel does (ELOOP), give up after 40 links.
+    for _ in 0..40 {
+        let to = std::fs::read_link(&path)?;
+        path = match path.parent() {
+            Some(dir) if to.is_relative() => dir.join(to),
+            _ => to,
+        };
+        if !std::fs::symlink_metadata(&path).is_ok_and(|m| m.file_type().is_symlink()) {
+            return Ok(path);
+        }
+    }
+    Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, "too many levels of symbolic links"))
 }
 
 /// Writes a whole file atomically (temporary name, then rename).

@@ -404,6 +404,12 @@ fn outputs_never_replace_what_is_not_a_regular_writable_file() {
     assert_eq!(ctlgraph(&["run", LAG, "--out", path(&link)]).status.code(), Some(0));
     assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
     assert!(std::fs::read_to_string(&real).unwrap().starts_with("t,u,y\n"));
+    // A dangling link: its target is created, the link stays a link.
+    let (dangling, missing) = (dir.path().join("dangling.csv"), dir.path().join("new.csv"));
+    std::os::unix::fs::symlink("new.csv", &dangling).unwrap();
+    assert_eq!(ctlgraph(&["run", LAG, "--out", path(&dangling)]).status.code(), Some(0));
+    assert!(std::fs::symlink_metadata(&dangling).unwrap().file_type().is_symlink());
+    assert!(std::fs::read_to_string(&missing).unwrap().starts_with("t,u,y\n"));
     // A read-only file is not silently replaced.
     let ro = dir.path().join("ro.csv");
     std::fs::write(&ro, "keep").unwrap();
@@ -458,4 +464,35 @@ fn devices_and_fifos_are_refused_not_read() {
     let out = ctlgraph(&["check", path(&including)]);
     assert_eq!(out.status.code(), Some(2));
     assert!(text(&out.stderr).contains("cannot read `/dev/zero`: not a regular file"), "{}", text(&out.stderr));
+}
+
+/// `check`'s count of major steps is a floor for the adaptive methods: no
+/// bundled adaptive run takes fewer (multirate.yaml's run takes 2 005
+/// steps, which a sum of its clocks' counts put at 2 300 at least).
+#[test]
+fn the_major_steps_check_promises_are_a_floor_for_adaptive_runs() {
+    for graph in common::bundled_graphs() {
+        let Ok(model) = ctlgraph::compile_file(&graph, &[]) else { continue };
+        if !model.sim.method.is_adaptive() {
+            continue;
+        }
+        let mut sim = ctlgraph_core::Simulator::new(model, None);
+        let floor = sim.expected_major_steps();
+        if floor > 1e5 {
+            continue;
+        }
+        let Ok(stats) = sim.run(&mut |_, _| {}) else { continue };
+        assert!(stats.major_steps as f64 >= floor, "{}: {} steps, floor {floor}", graph.display(), stats.major_steps);
+    }
+}
+
+/// An optional parameter is not listed as required: mux's and demux's
+/// `widths` default to one scalar port per `inputs`/`outputs`.
+#[test]
+fn blocks_lists_optional_parameters_with_their_default() {
+    for ty in ["mux", "demux"] {
+        let s = text(&ctlgraph(&["blocks", ty]).stdout);
+        let line = s.lines().find(|l| l.trim_start().starts_with("widths")).unwrap_or_else(|| panic!("{s}"));
+        assert!(!line.contains("required") && line.contains("default 1 for each of"), "{line}");
+    }
 }

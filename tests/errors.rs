@@ -55,6 +55,21 @@ fn wrong_parameter_type_and_shape() {
 }
 
 #[test]
+fn limits_in_the_wrong_order_are_refused_with_the_hint_to_swap_them() {
+    let yaml =
+        "blocks:\n  s: { type: sine }\n  r: { type: relay, on_threshold: -0.5, off_threshold: 0.5 }\nwires: [s -> r]\n";
+    check(
+        yaml,
+        3,
+        35,
+        "`on_threshold` (-0.5) must be >= `off_threshold` (0.5)",
+        Some("swap them: `off_threshold: -0.5, on_threshold: 0.5`"),
+    );
+    let yaml = "blocks:\n  u: { type: step }\n  l: { type: saturation, lower: 1, upper: -1 }\nwires: [u -> l]\n";
+    check(yaml, 3, 43, "`upper` (-1) must be >= `lower` (1)", Some("swap them: `lower: -1, upper: 1`"));
+}
+
+#[test]
 fn expression_errors_point_inside_the_string() {
     let yaml = "parameters:\n  w0: 1000\n  b: \"3*w00\"\n";
     check(yaml, 3, 9, "parameter `b`: unknown name `w00`", Some("did you mean `w0`?"));

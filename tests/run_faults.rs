@@ -164,7 +164,8 @@ fn check_states_the_expected_steps_and_warns_of_a_long_run() {
     assert!(text(&out.stdout).contains("\nabout 20000 major steps to the stop time\n"), "{}", text(&out.stdout));
     assert!(!text(&out.stdout).contains("warning"));
     let out = ctlgraph(&["check", "graphs/tutorial/multirate.yaml"]);
-    assert!(text(&out.stdout).contains("\nat least 2300 major steps to the stop time\n"), "{}", text(&out.stdout));
+    // A floor: its clocks' hits coincide (1 kHz and 50 Hz), so the larger count, not their sum (2 300).
+    assert!(text(&out.stdout).contains("\nat least 2000 major steps to the stop time\n"), "{}", text(&out.stdout));
     let dir = tempfile::tempdir().unwrap();
     let g = dir.path().join("year.yaml");
     std::fs::write(

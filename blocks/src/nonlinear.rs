@@ -143,7 +143,9 @@ impl Block for Piecewise {
 pub(crate) fn limits(p: &mut Params, lo: &str, hi: &str) -> Result<(f64, f64), Diagnostic> {
     let (lower, upper) = (p.number(lo)?, p.number(hi)?);
     if lower > upper || lower.is_nan() || upper.is_nan() {
-        return Err(p.error(hi, format!("`{hi}` ({upper}) must be >= `{lo}` ({lower})")));
+        return Err(p
+            .error(hi, format!("`{hi}` ({upper}) must be >= `{lo}` ({lower})"))
+            .with_hint(format!("swap them: `{lo}: {upper}, {hi}: {lower}`")));
     }
     Ok((lower, upper))
 }

@@ -16,7 +16,8 @@ pub const TYPES: &[BlockType] = &[
         outputs: &[PortDoc { name: "y", doc: "width = sum of the input widths" }],
         params: &[
             param("inputs", Number(2.0), "number of scalar inputs (when `widths` is not given)"),
-            param("widths", Required, "width of each input, e.g. [2, 1]").kind(ParamKind::Numbers),
+            param("widths", Described("1 for each of `inputs`"), "width of each input, e.g. [2, 1]")
+                .kind(ParamKind::Numbers),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_mux,
@@ -30,7 +31,7 @@ pub const TYPES: &[BlockType] = &[
         outputs: &[PortDoc { name: "y1 … yn", doc: "widths as given" }],
         params: &[
             param("outputs", Number(2.0), "number of scalar outputs (when `widths` is not given)"),
-            param("widths", Required, "width of each output").kind(ParamKind::Numbers),
+            param("widths", Described("1 for each of `outputs`"), "width of each output").kind(ParamKind::Numbers),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_demux,

@@ -228,9 +228,16 @@ impl Simulator {
 
     /// About how many major steps the run takes: the fixed-step grid plus
     /// the sample hits that fall between its points. For the adaptive
-    /// methods, whose steps `max_step` bounds, it is a floor.
+    /// methods a floor: every step is at most `max_step` long and every
+    /// sample hit is a step, so the larger of the two counts (not their
+    /// sum: hits of several clocks and the solver's steps may coincide).
     pub fn expected_major_steps(&self) -> f64 {
         let c = &self.state.clockwork;
+        if c.method().is_adaptive() {
+            let hits = |clock: &clock::Clock| ((c.stop - clock.offset) / clock.grid.step).floor().max(0.0);
+            let most_hits = c.clocks.iter().map(hits).fold(0.0, f64::max);
+            return (c.stop / c.method().max_step()).ceil().max(most_hits);
+        }
         let mut n = c.stop / c.method().max_step();
         for clock in &c.clocks {
             let ratio = clock.grid.step / c.grid_step;
