@@ -75,6 +75,23 @@ fn every_quoted_command_prints_what_the_readme_shows() {
     assert!(ran >= 3, "found only {ran} quoted commands");
 }
 
+/// Step 3's softer gain fails two of the graph's checks, as the README
+/// says it does, with the quoted line and exit code.
+#[test]
+fn the_softer_gain_of_step_3_fails_the_checks_the_readme_says() {
+    let command = README.lines().find(|l| l.contains("--set kp=0.5")).expect("step 3's command");
+    let command = command.split('#').next().unwrap().trim();
+    let args: Vec<&str> = command.split_whitespace().skip(1).collect();
+    let out = ctlgraph(&args);
+    assert!(README.contains("exits 1: see below") && README.contains("the run\nexits 1 and says `2 of 4 checks failed`"));
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("2 of 4 checks failed"), "{}", text(&out.stderr));
+    let words = |s: &str| s.split_whitespace().collect::<Vec<_>>().join(" ");
+    let quoted = words(README.split("fail (`").nth(1).unwrap().split(", …)`").next().unwrap());
+    let printed = text(&out.stdout);
+    assert!(printed.lines().any(|l| words(l).starts_with(&quoted)), "no `{quoted}` in {printed}");
+}
+
 #[test]
 fn the_first_tutorial_step_prints_what_it_says() {
     // The YAML after "Save as `lag.yaml`:", run as the tutorial says.
