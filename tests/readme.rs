@@ -83,7 +83,9 @@ fn the_softer_gain_of_step_3_fails_the_checks_the_readme_says() {
     let command = command.split('#').next().unwrap().trim();
     let args: Vec<&str> = command.split_whitespace().skip(1).collect();
     let out = ctlgraph(&args);
-    assert!(README.contains("exits 1: see below") && README.contains("the run\nexits 1 and says `2 of 4 checks failed`"));
+    assert!(
+        README.contains("exits 1: see below") && README.contains("the run\nexits 1 and says `2 of 4 checks failed`")
+    );
     assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
     assert!(text(&out.stderr).contains("2 of 4 checks failed"), "{}", text(&out.stderr));
     let words = |s: &str| s.split_whitespace().collect::<Vec<_>>().join(" ");
