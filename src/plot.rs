@@ -142,8 +142,11 @@ fn draw_panel<DB: DrawingBackend>(
     Ok(())
 }
 
-/// The corner of the panel where the legend covers the fewest samples: the
-/// legend is about a fifth of the width wide and one text line per entry high.
+/// The corner of the panel where the legend covers the least of the drawn
+/// lines (their length inside it, in panel fractions): the legend is about
+/// a fifth of the width wide and one text line per entry high. Lines, not
+/// samples: an adaptive run samples a flat stretch of a two-level signal
+/// sparsely, and a corner it crosses between two samples is not empty.
 fn quiet_corner(
     trace: &Trace,
     t: &[f64],
@@ -159,17 +162,44 @@ fn quiet_corner(
         (SeriesLabelPosition::LowerRight, 1.0 - w, 0.0),
         (SeriesLabelPosition::LowerLeft, 0.0, 0.0),
     ];
-    let covered = |x0: f64, y0: f64| {
+    let at = |k: usize, c: usize| [(t[k] - t0) / (t1 - t0), (trace.columns[c][k] - lo) / (hi - lo)];
+    let covered = |x0: f64, y0: f64| -> f64 {
         p.columns
             .iter()
-            .flat_map(|&c| (first..last).map(move |k| (t[k], trace.columns[c][k])))
-            .filter(|&(x, y)| {
-                let (x, y) = ((x - t0) / (t1 - t0), (y - lo) / (hi - lo));
-                x >= x0 && x <= x0 + w && y >= y0 && y <= y0 + h
-            })
-            .count()
+            .flat_map(|&c| (first..last.saturating_sub(1)).map(move |k| (at(k, c), at(k + 1, c))))
+            .map(|(a, b)| length_inside(a, b, [x0, x0 + w], [y0, y0 + h]))
+            .sum()
     };
-    corners.into_iter().min_by_key(|&(_, x0, y0)| covered(x0, y0)).map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+    corners
+        .into_iter()
+        .map(|(corner, x0, y0)| (corner, covered(x0, y0)))
+        .fold(None, |best: Option<(SeriesLabelPosition, f64)>, (corner, ink)| match best {
+            Some((_, least)) if least <= ink => best,
+            _ => Some((corner, ink)),
+        })
+        .map_or(SeriesLabelPosition::UpperRight, |(corner, _)| corner)
+}
+
+/// The length of the segment from `a` to `b` inside the box `x` × `y`
+/// (Liang–Barsky clipping); 0 for a segment with a value not finite.
+fn length_inside(a: [f64; 2], b: [f64; 2], x: [f64; 2], y: [f64; 2]) -> f64 {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    if !(a.iter().chain(&b).all(|v| v.is_finite())) {
+        return 0.0;
+    }
+    let (mut enter, mut leave) = (0.0f64, 1.0f64);
+    for (p, q) in [(-d[0], a[0] - x[0]), (d[0], x[1] - a[0]), (-d[1], a[1] - y[0]), (d[1], y[1] - a[1])] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return 0.0;
+            }
+        } else if p < 0.0 {
+            enter = enter.max(q / p);
+        } else {
+            leave = leave.min(q / p);
+        }
+    }
+    if enter < leave { (leave - enter) * d[0].hypot(d[1]) } else { 0.0 }
 }
 
 /// `label [unit]`, or the label alone — also when the label already ends
@@ -319,6 +349,34 @@ fn bucket_extremes(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_segment_is_measured_inside_a_box() {
+        let unit = ([0.0, 1.0], [0.0, 1.0]);
+        assert!((length_inside([-1.0, 0.5], [2.0, 0.5], unit.0, unit.1) - 1.0).abs() < 1e-12);
+        assert!((length_inside([0.0, 0.0], [1.0, 1.0], unit.0, unit.1) - 2f64.sqrt()).abs() < 1e-12);
+        assert_eq!(length_inside([2.0, 0.0], [3.0, 1.0], unit.0, unit.1), 0.0);
+        assert_eq!(length_inside([0.5, 0.5], [0.5, 0.5], unit.0, unit.1), 0.0);
+        assert_eq!(length_inside([0.0, f64::NAN], [1.0, 0.5], unit.0, unit.1), 0.0);
+    }
+
+    /// The lower-left corner holds no sample, but a line crosses it (a
+    /// drop below the axis between two samples); each other corner holds
+    /// one isolated sample and no line. The legend goes where no line is.
+    #[test]
+    fn the_legend_avoids_a_corner_a_line_crosses_between_samples() {
+        let t = vec![0.0, 0.2, 0.8, 0.9, 1.0];
+        let nan = f64::NAN;
+        let trace = Trace {
+            headers: ["t", "a", "b"].map(String::from).to_vec(),
+            columns: vec![t.clone(), vec![0.3, -0.5, nan, nan, nan], vec![nan, 0.9, 0.9, 0.1, nan]],
+            loop_figures: None,
+        };
+        let panel =
+            Panel { title: None, columns: vec![1, 2], y_desc: String::new(), y_limits: None, window: None, band: None };
+        let corner = quiet_corner(&trace, &t, &panel, (0, t.len()), ([0.0, 1.0], [0.0, 1.0]), 1);
+        assert!(!matches!(corner, SeriesLabelPosition::LowerLeft), "{corner:?}");
+    }
 
     #[test]
     fn an_axis_label_names_its_unit_once() {
