@@ -199,7 +199,12 @@ pub fn bode_svg(b: &Bode, m: &Margins, title: &str) -> Result<String, String> {
     {
         let root = SVGBackend::with_string(&mut svg, (1000, 640)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let root = root.titled(title, ("sans-serif", 22)).map_err(|e| e.to_string())?;
+        // The description is long (graph, loop, operating point, discrete
+        // model): one line per clause, each at a size that fits the width.
+        let mut root = root;
+        for line in title_lines(title) {
+            root = root.titled(line, ("sans-serif", title_size(line, 1000.0))).map_err(|e| e.to_string())?;
+        }
         let (top, bottom) = root.split_vertically(300);
         let crossings = [
             (
@@ -227,6 +232,8 @@ pub fn bode_svg(b: &Bode, m: &Margins, title: &str) -> Result<String, String> {
                 .map_err(|e| e.to_string())?;
             chart
                 .configure_mesh()
+                .x_label_formatter(&log_tick)
+                .y_label_formatter(&crate::plot::tick)
                 .x_desc("ω [rad/s]")
                 .y_desc(y_desc)
                 .light_line_style(RGBColor(235, 235, 235))
@@ -262,6 +269,40 @@ pub fn bode_svg(b: &Bode, m: &Margins, title: &str) -> Result<String, String> {
 }
 
 /// A number for JSON: `null` for NaN and infinities (JSON has none).
+/// A plot title's lines: its clauses, split at "; ".
+fn title_lines(title: &str) -> impl Iterator<Item = &str> {
+    title.split("; ").map(str::trim).filter(|l| !l.is_empty())
+}
+
+/// The font size (px, at most 22) at which `line` fits in `width` px with
+/// a margin, taking a sans-serif character as 0.6 em wide on average
+/// (a generous bound: digits and most lower-case letters are narrower).
+fn title_size(line: &str, width: f64) -> f64 {
+    let chars = line.chars().count().max(1) as f64;
+    (0.95 * width / (0.6 * chars)).min(22.0)
+}
+
+/// A tick label of a log axis, to three significant digits: `0.01`,
+/// `1000`, `1e-5` — not `9.999999999999999e-6`, the decade computed as
+/// 10^-5 in floating point.
+fn log_tick(v: &f64) -> String {
+    if *v == 0.0 || !v.is_finite() {
+        return v.to_string();
+    }
+    let decade = v.abs().log10().floor() as i32;
+    let trim = |s: String| if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s };
+    if (-3..5).contains(&decade) {
+        let digits = (2 - decade).max(0) as usize;
+        trim(format!("{v:.digits$}"))
+    } else {
+        let mantissa = v / 10f64.powi(decade);
+        // 9.995 rounds to 10.0: carry into the next decade.
+        let (mantissa, decade) =
+            if mantissa.abs() >= 9.995 { (mantissa / 10.0, decade + 1) } else { (mantissa, decade) };
+        format!("{}e{decade}", trim(format!("{mantissa:.2}")))
+    }
+}
+
 fn num(v: f64) -> Value {
     if v.is_finite() { json!(v) } else { Value::Null }
 }
@@ -300,4 +341,44 @@ pub fn to_json(lin: &Linearization, figures: Option<&Figures>) -> Value {
         });
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{log_tick, title_lines, title_size};
+
+    #[test]
+    fn log_axis_ticks_are_short() {
+        let cases = [
+            (9.999999999999999e-6, "1e-5"),
+            (1e-7, "1e-7"),
+            (2.5e-7, "2.5e-7"),
+            (0.001, "0.001"),
+            (0.01, "0.01"),
+            (1.0, "1"),
+            (1000.0, "1000"),
+            (1e5, "1e5"),
+            (99_950.0, "99950"),
+            (9.9996e5, "1e6"),
+        ];
+        for (v, text) in cases {
+            assert_eq!(log_tick(&v), text, "{v}");
+        }
+    }
+
+    /// A discrete loop's description (175 characters) was one title line
+    /// at 22 px, some 1 600 px wide on a 1 000 px plot: cut at both ends.
+    #[test]
+    fn a_long_bode_title_is_split_into_lines_that_fit() {
+        let title = "graphs/tutorial/multirate.yaml: loop transfer at `ctrl` (negative feedback), around t = 0; \
+                     discrete model at the sample time T = 0.001 s (continuous part by zero-order hold)";
+        let lines: Vec<&str> = title_lines(title).collect();
+        assert_eq!(lines.len(), 2);
+        for line in lines {
+            let size = title_size(line, 1000.0);
+            assert!(line.chars().count() as f64 * 0.6 * size <= 950.0 + 1e-9, "{line} at {size}");
+            assert!(size > 10.0, "{line} readable at {size} px");
+        }
+        assert_eq!(title_size("short", 1000.0), 22.0);
+    }
 }

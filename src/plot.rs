@@ -26,7 +26,7 @@ pub const PALETTE: [RGBColor; 8] = [
 ];
 
 /// A tick label in its shortest form: `250`, not `250.0`; `0`, not `-0.0`.
-fn tick(v: &f64) -> String {
+pub(crate) fn tick(v: &f64) -> String {
     let v = if v.abs() < 1e-12 { 0.0 } else { *v };
     let text = format!("{v:.6}");
     let text = text.trim_end_matches('0').trim_end_matches('.');
