@@ -159,7 +159,9 @@ fn subsystem_file(flat: &FlatGraph, sub: &str) -> String {
     spec.rsplit('/').next().unwrap_or(&spec).to_string()
 }
 
-/// Up to [`SHOWN_PARAMS`] parameters as written: numbers and short texts.
+/// Up to [`SHOWN_PARAMS`] parameters: numbers, short texts, short lists;
+/// an expression of the graph's parameters as written and its value
+/// (`kp = kp (2)`), a list of up to four numbers by its values.
 fn key_params(b: &ctlgraph_core::flatten::FlatBlock) -> Vec<String> {
     let mut shown = Vec::new();
     for (key, value) in &b.spec.params {
@@ -168,9 +170,19 @@ fn key_params(b: &ctlgraph_core::flatten::FlatBlock) -> Vec<String> {
         }
         let text = match &value.kind {
             Kind::Num(v) => format!("{v}"),
-            Kind::Str(s) => s.clone(),
+            Kind::Str(s) => match resolved(b, value) {
+                Some(v) if v.to_string() != *s => format!("{s} ({v})"),
+                _ => s.clone(),
+            },
             Kind::Bool(v) => v.to_string(),
-            Kind::Seq(items) => format!("[{} values]", items.len()),
+            Kind::Seq(items) => {
+                let values: Option<Vec<String>> =
+                    items.iter().map(|item| resolved(b, item).map(|v| v.to_string())).collect();
+                match values {
+                    Some(values) if items.len() <= 4 => format!("[{}]", values.join(", ")),
+                    _ => format!("[{} values]", items.len()),
+                }
+            }
             Kind::Map(_) | Kind::Null => continue,
         };
         let text =
@@ -178,6 +190,17 @@ fn key_params(b: &ctlgraph_core::flatten::FlatBlock) -> Vec<String> {
         shown.push(format!("{} = {text}", key.name));
     }
     shown
+}
+
+/// A number, or an expression of the graph's parameters evaluated in the
+/// block's scope; `None` for anything else (a formula in the block's own
+/// variables, a word, a file).
+fn resolved(b: &ctlgraph_core::flatten::FlatBlock, value: &ctlgraph_core::yaml::Yaml) -> Option<f64> {
+    match &value.kind {
+        Kind::Num(v) => Some(*v),
+        Kind::Str(s) => ctlgraph_core::params::eval_number(s, &value.pos, &b.scope).ok(),
+        _ => None,
+    }
 }
 
 /// Positions by layout-rs's layered placement (left to right); if it
@@ -227,8 +250,9 @@ fn place(d: &mut Diagram) {
         n.y += MARGIN + 30.0 - min_y;
     }
     d.width = d.nodes.iter().map(|n| n.x + n.w).fold(0.0, f64::max) + MARGIN;
-    // Room below for feedback wires.
-    d.height = d.nodes.iter().map(|n| n.y + n.h).fold(0.0, f64::max) + MARGIN + 12.0 * d.wires.len().min(10) as f64;
+    // Room below for the feedback wires' lanes (see `to_svg`), not one per wire.
+    let lanes = d.wires.iter().filter(|w| is_feedback(d, w)).count().min(10);
+    d.height = d.nodes.iter().map(|n| n.y + n.h).fold(0.0, f64::max) + MARGIN + 12.0 * lanes as f64;
 }
 
 /// The wires that run left to right, as a cycle-free set: first every
@@ -263,6 +287,14 @@ fn forward_wires(d: &Diagram) -> Vec<(usize, usize)> {
     kept
 }
 
+/// Whether wire `w` runs back (its input port is not right of its output
+/// port): drawn below every block, in a lane of its own.
+fn is_feedback(d: &Diagram, w: &Wire) -> bool {
+    let (x0, _) = d.nodes[w.src].out_port(w.src_port);
+    let (x1, _) = d.nodes[w.dst].in_port(w.dst_port);
+    x1 <= x0 + 10.0
+}
+
 impl Node {
     fn in_port(&self, k: usize) -> (f64, f64) {
         (self.x, self.y + self.h * (k as f64 + 0.5) / self.inputs.len().max(1) as f64)
@@ -292,7 +324,7 @@ pub fn to_svg(d: &Diagram) -> String {
     for w in &d.wires {
         let (a, b) = (&d.nodes[w.src], &d.nodes[w.dst]);
         let ((x0, y0), (x1, y1)) = (a.out_port(w.src_port), b.in_port(w.dst_port));
-        let path = if x1 > x0 + 10.0 {
+        let path = if !is_feedback(d, w) {
             let c = (x1 - x0) / 2.0;
             format!("M{x0:.1},{y0:.1} C{:.1},{y0:.1} {:.1},{y1:.1} {x1:.1},{y1:.1}", x0 + c, x1 - c)
         } else {
@@ -305,7 +337,7 @@ pub fn to_svg(d: &Diagram) -> String {
                 x1 - 10.0 - 2.0 * lane as f64
             )
         };
-        let class = if x1 > x0 + 10.0 { "wire" } else { "wire feedback" };
+        let class = if is_feedback(d, w) { "wire feedback" } else { "wire" };
         let _ = writeln!(
             s,
             "<path class=\"{class}\" d=\"{path}\" fill=\"none\" stroke=\"#333\" stroke-width=\"1.3\" \

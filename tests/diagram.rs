@@ -97,3 +97,34 @@ fn the_cli_writes_the_svg() {
     assert_eq!(String::from_utf8_lossy(&done.stdout), format!("{}: 4 boxes, 4 wires\n", out.display()));
     assert!(std::fs::read_to_string(&out).unwrap().starts_with("<svg "));
 }
+
+/// A box shows a parameter written as an expression with its value, and a
+/// short list by its values (`kp = kp (2)`, `den = [1, 14, 100]`), not
+/// `[3 values]`.
+#[test]
+fn boxes_show_expressions_with_their_values() {
+    let flat = ctlgraph::core::load(Path::new("graphs/tutorial/pid_loop.yaml"), &[]).unwrap();
+    let model = ctlgraph::core::compile(&flat, &ctlgraph::registry()).unwrap();
+    let d = build(&flat, &model, false);
+    let lines = |name: &str| d.nodes.iter().find(|n| n.name == name).unwrap().lines.clone();
+    assert!(lines("ctrl").contains(&"kp = kp (2)".to_string()), "{:?}", lines("ctrl"));
+    let plant = lines("plant");
+    assert!(plant.iter().any(|l| l.starts_with("den = [1, ") && !l.contains("values")), "{plant:?}");
+}
+
+/// The room below the boxes is the feedback wires' lanes (12 px each) and
+/// a margin, not a lane for every wire (which left a quarter of a diagram
+/// blank).
+#[test]
+fn the_drawing_ends_below_its_last_feedback_lane() {
+    for file in ["graphs/tutorial/pid_loop.yaml", "graphs/fladrc/ladrc.yaml"] {
+        let flat = ctlgraph::core::load(Path::new(file), &[]).unwrap();
+        let model = ctlgraph::core::compile(&flat, &ctlgraph::registry()).unwrap();
+        let d = build(&flat, &model, false);
+        let feedback = to_svg(&d).matches("class=\"wire feedback\"").count();
+        let bottom = d.nodes.iter().map(|n| n.y + n.h).fold(0.0, f64::max);
+        let below = d.height - bottom;
+        assert!(below <= 30.0 + 12.0 * feedback.min(10) as f64, "{file}: {below} px below the boxes, {feedback} lanes");
+        assert!(below >= 12.0 * feedback.min(10) as f64, "{file}: the lanes fit");
+    }
+}
