@@ -13,22 +13,9 @@
 //! `ladrc` (graphs/fladrc/ladrc.yaml), `chain10` (the scaling bench's
 //! sine → 10 gains → integrator at RK4 h = 0.01).
 
-use std::fmt::Write;
-
-fn chain(n: usize) -> String {
-    let mut g = String::from("simulation: { stop: 1.0, solver: { method: rk4, step: 0.01 } }\nblocks:\n");
-    g.push_str("  u: { type: sine }\n  x: { type: integrator }\n");
-    for i in 1..=n {
-        writeln!(g, "  g{i}: {{ type: gain, k: 1.0 }}").unwrap();
-    }
-    g.push_str("wires:\n");
-    let names: Vec<String> = std::iter::once("u".into()).chain((1..=n).map(|i| format!("g{i}"))).collect();
-    for pair in names.windows(2) {
-        writeln!(g, "  - {} -> {}", pair[0], pair[1]).unwrap();
-    }
-    writeln!(g, "  - {} -> x", names[n]).unwrap();
-    g
-}
+#[path = "../benches/graphs/mod.rs"]
+mod graphs;
+use graphs::chain;
 
 /// The run callgrind counts: `steps` major steps after t = 0.
 #[inline(never)]

@@ -324,7 +324,8 @@ pub fn to_svg(d: &Diagram) -> String {
     for w in &d.wires {
         let (a, b) = (&d.nodes[w.src], &d.nodes[w.dst]);
         let ((x0, y0), (x1, y1)) = (a.out_port(w.src_port), b.in_port(w.dst_port));
-        let path = if !is_feedback(d, w) {
+        let feedback = is_feedback(d, w);
+        let path = if !feedback {
             let c = (x1 - x0) / 2.0;
             format!("M{x0:.1},{y0:.1} C{:.1},{y0:.1} {:.1},{y1:.1} {x1:.1},{y1:.1}", x0 + c, x1 - c)
         } else {
@@ -337,7 +338,7 @@ pub fn to_svg(d: &Diagram) -> String {
                 x1 - 10.0 - 2.0 * lane as f64
             )
         };
-        let class = if is_feedback(d, w) { "wire feedback" } else { "wire" };
+        let class = if feedback { "wire feedback" } else { "wire" };
         let _ = writeln!(
             s,
             "<path class=\"{class}\" d=\"{path}\" fill=\"none\" stroke=\"#333\" stroke-width=\"1.3\" \

@@ -170,13 +170,11 @@ fn quiet_corner(
             .map(|(a, b)| length_inside(a, b, [x0, x0 + w], [y0, y0 + h]))
             .sum()
     };
+    // The first corner of the least ink (`min_by` keeps the first of equals).
     corners
         .into_iter()
         .map(|(corner, x0, y0)| (corner, covered(x0, y0)))
-        .fold(None, |best: Option<(SeriesLabelPosition, f64)>, (corner, ink)| match best {
-            Some((_, least)) if least <= ink => best,
-            _ => Some((corner, ink)),
-        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
         .map_or(SeriesLabelPosition::UpperRight, |(corner, _)| corner)
 }
 

@@ -418,10 +418,8 @@ impl<'a> Params<'a> {
     pub fn flag(&mut self, key: &str) -> Result<bool, Diagnostic> {
         match self.default_of(key) {
             ParamDefault::Flag(default) => self.bool_or(key, default),
-            ParamDefault::Required => match self.raw(key) {
-                Some(_) => self.bool_or(key, false),
-                None => Err(self.missing(key)),
-            },
+            ParamDefault::Required if self.has(key) => self.bool_or(key, false),
+            ParamDefault::Required => Err(self.missing(key)),
             _ => Err(self.default_mismatch(key, "a flag")),
         }
     }

@@ -21,7 +21,6 @@ impl Simulator {
     /// signals as they stand.
     pub(super) fn hand_left_limits(&mut self, at: Breakpoint) {
         let (m, s) = (&*self.model, &mut self.state);
-        s.clockwork.events_may_change = true;
         for &i in &self.history {
             let io = io_for(&m.slots[i], s.clockwork.t, true, &s.x, &mut s.signals, &m.in_ports, &m.out_ports)
                 .in_minor_step(s.blocks[i].frozen);

@@ -57,6 +57,8 @@ impl Simulator {
         if !self.state.clockwork.first && !self.state.inputs_changed {
             // The outputs at this time, with the input before, are its left limit.
             self.hand_left_limits(crate::block::Breakpoint { generation: 0, sample_hit_only: false });
+            // As after the driver's left limits: updates may schedule events.
+            self.state.clockwork.events_may_change = true;
         }
         if let Some(held) = self.state.blocks[block].external_input() {
             held.copy_from_slice(value);
