@@ -8,6 +8,7 @@
 //! println!("y(end) = {}", trace.column("y").unwrap().last().unwrap());
 //! ```
 
+pub mod accel;
 pub mod analysis;
 pub mod cache;
 pub mod diagram;

@@ -9,6 +9,7 @@ mod run_cmd;
 mod sweep_cmd;
 
 use clap::{Parser, Subcommand};
+use ctlgraph::accel::Mode;
 use ctlgraph::prop::{PropConfig, PropOutcome, Vary};
 use ctlgraph::suite::Failure;
 use ctlgraph_core::flatten::parse_set;
@@ -83,6 +84,11 @@ enum Command {
         /// End the run after this many seconds of wall time (exit 1; the outputs hold what was simulated).
         #[arg(long, value_name = "SECONDS")]
         max_wall: Option<f64>,
+        /// Run the graph's generated step, built once with cargo and cached: `on` (the bare flag) runs
+        /// interpreted with a note when it cannot, `require` makes that an error, `off` interprets.
+        #[arg(long, value_name = "on|require|off", num_args = 0..=1, default_missing_value = "on",
+              require_equals = true, value_parser = Mode::parse)]
+        accelerate: Option<Mode>,
     },
     /// Run every graph with `checks:` under the given files or folders.
     #[command(after_help = "Example:\n  ctlgraph test graphs/tutorial graphs/fladrc/compare.yaml")]
@@ -231,20 +237,23 @@ fn main() -> ExitCode {
     interrupt::quiet_on_closed_pipe();
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run { graph, out, plot, sets, stop_time, report, html, seed, max_steps, max_wall } => run_cmd::run(
-            &graph,
-            RunOptions {
-                out: out.as_deref(),
-                plot: plot.as_deref(),
-                stop_time,
-                report: report.as_deref(),
-                html: html.as_deref(),
-                seed,
-                max_steps,
-                max_wall,
-            },
-            &sets,
-        ),
+        Command::Run { graph, out, plot, sets, stop_time, report, html, seed, max_steps, max_wall, accelerate } => {
+            run_cmd::run(
+                &graph,
+                RunOptions {
+                    out: out.as_deref(),
+                    plot: plot.as_deref(),
+                    stop_time,
+                    report: report.as_deref(),
+                    html: html.as_deref(),
+                    seed,
+                    max_steps,
+                    max_wall,
+                    accelerate: accelerate.unwrap_or_default(),
+                },
+                &sets,
+            )
+        }
         Command::Test { paths } => test(paths),
         Command::Prop { graph, vary, vary_seed, cases, seed } => prop(&graph, &vary, vary_seed, cases, seed),
         Command::Sweep { merge: Some(SweepMerge::Merge { tables, out }), .. } => sweep_merge(&tables, &out),

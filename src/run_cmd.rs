@@ -5,12 +5,13 @@
 
 use crate::interrupt;
 use crate::progress::Progress;
+use ctlgraph::accel::{self, AcceleratedRun, Cost, Mode};
 use ctlgraph::html::Report;
 use ctlgraph::record::{CsvFile, Number, Recorder, Trace, write_atomic};
 use ctlgraph::report::{RunInfo, to_json};
 use ctlgraph::suite::Failure;
 use ctlgraph_core::flatten::parse_set;
-use ctlgraph_core::{Diagnostic, Simulator};
+use ctlgraph_core::{Diagnostic, RunStats, Simulator};
 use std::path::Path;
 use std::time::Instant;
 
@@ -24,6 +25,7 @@ pub(crate) struct RunOptions<'a> {
     pub seed: Option<u64>,
     pub max_steps: Option<u64>,
     pub max_wall: Option<f64>,
+    pub accelerate: Mode,
 }
 
 /// Block-steps (major steps × blocks) above which a run is announced as
@@ -106,6 +108,7 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
     let model = ctlgraph::compile_flat(&flat, &ctlgraph::registry())?;
     let seed = model.sim.seed;
     let mut sim = Simulator::new(model, opts.stop_time);
+    let mut accelerated = accelerated(opts.accelerate, &sim, graph, &sets, opts.seed, opts.stop_time)?;
     if let Some(w) = long_run_warning(&sim) {
         eprintln!("warning: {w}");
     }
@@ -136,7 +139,7 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
             tr.push(row);
         }
     };
-    let result = sim.run_while(&mut |t, signals| {
+    let mut sink = |t, signals: &[f64]| {
         recorder.sample(t, signals, &mut emit);
         last_step = t;
         steps += 1;
@@ -153,10 +156,18 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
             cut = Some(Cut::Interrupted);
         }
         cut.is_none()
-    });
+    };
+    let result = match accelerated.as_mut() {
+        Some((run, _)) => run.run_while(&mut sink),
+        None => sim.run_while(&mut sink),
+    };
     recorder.flush(&mut emit);
     progress.finish();
     let wall = start.elapsed().as_secs_f64();
+    let reached = match &accelerated {
+        Some((run, cost)) => Reached { time: run.time(), stats: run.stats(), cost: Some(*cost) },
+        None => Reached { time: sim.time(), stats: sim.stats(), cost: None },
+    };
     // A run that reached its stop time has no cut, even if one was asked
     // for at its last step.
     let cut = if matches!(result, Ok(false)) { cut } else { None };
@@ -167,7 +178,7 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
     };
     let error = match (&result, cut) {
         (Err(e), _) => Some(e.to_string()),
-        (_, Some(cut)) => Some(cut_message(cut, &sim)),
+        (_, Some(cut)) => Some(cut_message(cut, &sim, &reached)),
         _ => None,
     };
     let status = match (&result, cut) {
@@ -185,10 +196,10 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
             graph: &graph.display().to_string(),
             graph_bytes: &bytes,
             method: sim.method(),
-            stats: sim.stats(),
+            stats: reached.stats,
             seed,
             stop: sim.stop_time(),
-            simulated: sim.time(),
+            simulated: reached.time,
             wall_seconds: wall,
             status,
             error: error.clone(),
@@ -223,7 +234,7 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
         let svg = ctlgraph::plot::render_svg(tr, &title, &model.scopes, &model.columns).map_err(Failure::Run)?;
         write_atomic(path, svg.as_bytes()).map_err(io_error(path))?;
     }
-    let report = summary(graph, &sim, wall, &results, &skipped, finished);
+    let report = summary(graph, &sim, &reached, wall, &results, &skipped, finished);
     if let (true, Some(tr)) = (to_stdout, &trace) {
         let _ = std::io::Write::write_all(&mut std::io::stdout(), ctlgraph::record::trace_csv(tr).as_bytes());
         eprint!("{report}");
@@ -235,9 +246,9 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
     match (result, cut) {
         (Err(e), _) => Err(Failure::Run(format!("{e}{kept}"))),
         (_, Some(Cut::Interrupted)) => {
-            Err(Failure::Interrupted(format!("{}{kept}", cut_message(Cut::Interrupted, &sim))))
+            Err(Failure::Interrupted(format!("{}{kept}", cut_message(Cut::Interrupted, &sim, &reached))))
         }
-        (_, Some(c)) => Err(Failure::Run(format!("{}{kept}", cut_message(c, &sim)))),
+        (_, Some(c)) => Err(Failure::Run(format!("{}{kept}", cut_message(c, &sim, &reached)))),
         _ => {
             let failed = results.iter().filter(|r| !r.passed).count();
             if failed > 0 {
@@ -248,8 +259,41 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
     }
 }
 
-fn cut_message(cut: Cut, sim: &Simulator) -> String {
-    let at = format!("t = {} of {} s", sim.time(), Number(sim.stop_time()));
+/// Where the run got to, whichever ran it, and what an accelerated run's
+/// preparation cost.
+struct Reached {
+    time: f64,
+    stats: RunStats,
+    cost: Option<Cost>,
+}
+
+/// The accelerated run `mode` asks for, when it can be had; otherwise
+/// `None` after a note why (or, under `require`, that reason as the error).
+fn accelerated(
+    mode: Mode,
+    sim: &Simulator,
+    graph: &Path,
+    sets: &[(String, String)],
+    seed: Option<u64>,
+    stop: Option<f64>,
+) -> Result<Option<(AcceleratedRun, Cost)>, Failure> {
+    if mode == Mode::Off {
+        return Ok(None);
+    }
+    match accel::run(sim.model(), graph, sets, seed, stop) {
+        Ok(run) => Ok(Some(run)),
+        Err(why) if mode == Mode::Require => {
+            Err(Diagnostic::plain(format!("--accelerate=require: cannot accelerate: {why}")).into())
+        }
+        Err(why) => {
+            eprintln!("note: running interpreted, not accelerated: {why}");
+            Ok(None)
+        }
+    }
+}
+
+fn cut_message(cut: Cut, sim: &Simulator, reached: &Reached) -> String {
+    let at = format!("t = {} of {} s", reached.time, Number(sim.stop_time()));
     match cut {
         Cut::Interrupted => format!("interrupted at {at}"),
         Cut::MaxSteps(n) => format!("stopped at {at}: --max-steps {n} reached"),
@@ -261,21 +305,23 @@ fn cut_message(cut: Cut, sim: &Simulator) -> String {
 fn summary(
     graph: &Path,
     sim: &Simulator,
+    reached: &Reached,
     wall: f64,
     results: &[ctlgraph_core::checks::CheckResult],
     skipped: &[ctlgraph_core::checks::Check],
     finished: bool,
 ) -> String {
-    let simulated = sim.time();
+    let simulated = reached.time;
     let wall_text = if wall < 1.0 { format!("{:.2} ms", wall * 1e3) } else { format!("{wall:.3} s") };
-    let stats = sim.stats();
+    let stats = reached.stats;
     let plural = |n: u64, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
     let events = if stats.events > 0 { format!(", {} located", plural(stats.events, "event")) } else { String::new() };
     // Below 10 µs of wall time the ratio would be noise.
     let ratio =
         if wall >= 1e-5 && simulated > 0.0 { format!(" ({:.1}x real time)", simulated / wall) } else { String::new() };
+    let accelerated = reached.cost.map(|c| format!(", accelerated ({c})")).unwrap_or_default();
     let mut report = format!(
-        "{}: {}{events}, {simulated} s simulated in {wall_text} wall{ratio}\n",
+        "{}: {}{events}, {simulated} s simulated in {wall_text} wall{ratio}{accelerated}\n",
         graph.display(),
         plural(stats.major_steps, "step"),
     );

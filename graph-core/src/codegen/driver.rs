@@ -200,11 +200,18 @@ impl<G: GeneratedStep> Compiled<G> {
     /// The sink is a type parameter, not a `dyn` call: it inlines into the
     /// loop, which then keeps its values in registers across it.
     pub fn run(&mut self, mut sink: impl FnMut(f64, &[f64])) -> Result<RunStats, SimError> {
-        driver::run_while(self, |t, signals| {
+        self.run_while(|t, signals| {
             sink(t, signals);
             true
         })?;
         Ok(self.stats())
+    }
+
+    /// Like [`Compiled::run`], but `sink` may end the run early by
+    /// returning `false`, as [`crate::Simulator::run_while`]. Returns
+    /// whether the stop time was reached.
+    pub fn run_while(&mut self, sink: impl FnMut(f64, &[f64]) -> bool) -> Result<bool, SimError> {
+        driver::run_while(self, sink)
     }
 
     /// What names a block in this run's errors.

@@ -17,6 +17,7 @@
 
 mod driver;
 mod emit;
+pub mod export;
 
 use crate::compile::Model;
 pub use crate::sim::earlier;

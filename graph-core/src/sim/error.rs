@@ -22,6 +22,9 @@ pub enum SimError {
     /// A program driving the run asked for something impossible (see
     /// [`super::Simulator::advance_to`]).
     Host(String),
+    /// A run in an accelerated step library failed: its message, as the
+    /// library's driver wrote it (from one of the other kinds).
+    Reported(String),
 }
 
 /// A value as Rust prints it, but in exponent form when that would be a
@@ -59,7 +62,7 @@ impl fmt::Display for SimError {
                  hint: `solver: {{ zero_crossing: adaptive }}` ignores a chattering block's crossings, \
                  or reformulate (add hysteresis, a boundary layer)"
             ),
-            SimError::Host(message) => f.write_str(message),
+            SimError::Host(message) | SimError::Reported(message) => f.write_str(message),
         }
     }
 }

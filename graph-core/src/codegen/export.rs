@@ -1,0 +1,295 @@
+//! The C interface of an accelerated run: what a generated step compiled
+//! as a shared library exports, and what `ctlgraph --accelerate` loads.
+//!
+//! The library holds its own copy of ctlgraph's crates (built from the same
+//! source as the program that loads it), so nothing Rust-shaped crosses
+//! the boundary: the program hands over the graph as text with its
+//! overrides, seed and stop time, the library loads and compiles it with
+//! its own registry, checks that the generated step fits it, and runs it
+//! through the driver ([`super::Compiled`]) — the same code as the
+//! interpreter's time keeping, compiled into the library. Only numbers,
+//! byte strings and C function pointers pass: `#[repr(C)]` structs, an
+//! [`Api`] table reached through one exported symbol ([`SYMBOL`]), and a
+//! version ([`ABI_VERSION`]) checked before anything else is called.
+//!
+//! No panic crosses the boundary: every entry catches it and reports it as
+//! an error; the program's sink is called inside the run and must not
+//! unwind (the loader catches its own).
+
+use super::{Compiled, GeneratedStep};
+use crate::registry::Registry;
+use std::ffi::c_void;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+/// Bumped whenever [`Api`] or the structs it passes change.
+pub const ABI_VERSION: u32 = 1;
+
+/// The exported function returning the library's [`Api`].
+pub const SYMBOL: &[u8] = b"ctlgraph_accelerated_v1";
+
+/// Borrowed UTF-8 bytes.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct Str {
+    pub ptr: *const u8,
+    pub len: usize,
+}
+
+impl Str {
+    pub fn of(text: &str) -> Str {
+        Str { ptr: text.as_ptr(), len: text.len() }
+    }
+
+    /// # Safety
+    /// `ptr` points to `len` readable bytes for the borrow's lifetime.
+    unsafe fn text<'a>(self) -> Result<&'a str, String> {
+        if self.len == 0 {
+            return Ok("");
+        }
+        // SAFETY: the caller's promise.
+        let bytes = unsafe { std::slice::from_raw_parts(self.ptr, self.len) };
+        std::str::from_utf8(bytes).map_err(|e| format!("the loader passed text that is not UTF-8: {e}"))
+    }
+}
+
+/// What to run: the graph as [`crate::load_str`] takes it, its `--set`
+/// overrides as name/value pairs, the seed that replaces
+/// `simulation.seed` (when `has_seed`), and the stop time (NaN: the
+/// graph's own).
+#[repr(C)]
+pub struct Spec {
+    pub text: Str,
+    pub file: Str,
+    /// `2 * n_sets` strings: name, value, name, value, …
+    pub sets: *const Str,
+    pub n_sets: usize,
+    pub has_seed: bool,
+    pub seed: u64,
+    pub stop: f64,
+}
+
+/// Receives a message (an error): bytes valid for the call only.
+#[repr(C)]
+pub struct TextSink {
+    pub ctx: *mut c_void,
+    pub write: unsafe extern "C" fn(ctx: *mut c_void, text: *const u8, len: usize),
+}
+
+impl TextSink {
+    fn send(&self, text: &str) {
+        // SAFETY: the loader's sink accepts any bytes for the call's duration.
+        unsafe { (self.write)(self.ctx, text.as_ptr(), text.len()) }
+    }
+}
+
+/// Called at every major step with the time and the signal buffer (valid
+/// for the call only); returns whether the run goes on.
+pub type Sample = unsafe extern "C" fn(ctx: *mut c_void, t: f64, signals: *const f64, len: usize) -> bool;
+
+/// [`crate::RunStats`], flat.
+#[repr(C)]
+#[derive(Clone, Copy, Default)]
+pub struct Stats {
+    pub major_steps: u64,
+    pub steps: u64,
+    pub rejected: u64,
+    pub evaluations: u64,
+    pub jacobians: u64,
+    pub factorizations: u64,
+    pub newton_failures: u64,
+}
+
+impl From<crate::RunStats> for Stats {
+    fn from(s: crate::RunStats) -> Stats {
+        let v = s.solver;
+        Stats {
+            major_steps: s.major_steps,
+            steps: v.steps,
+            rejected: v.rejected,
+            evaluations: v.evaluations,
+            jacobians: v.jacobians,
+            factorizations: v.factorizations,
+            newton_failures: v.newton_failures,
+        }
+    }
+}
+
+impl From<Stats> for crate::RunStats {
+    fn from(s: Stats) -> crate::RunStats {
+        let solver = ctlgraph_solver::Stats {
+            steps: s.steps,
+            rejected: s.rejected,
+            evaluations: s.evaluations,
+            jacobians: s.jacobians,
+            factorizations: s.factorizations,
+            newton_failures: s.newton_failures,
+        };
+        crate::RunStats { major_steps: s.major_steps, solver, events: 0 }
+    }
+}
+
+/// [`RunWhile`]'s answer: the run reached its stop time.
+pub const FINISHED: i32 = 1;
+/// [`RunWhile`]'s answer: the sink ended the run.
+pub const CUT: i32 = 0;
+/// [`RunWhile`]'s answer (and [`Create`]'s null): see the message.
+pub const FAILED: i32 = -1;
+
+/// Loads, compiles and prepares a run; null (and a message) when it cannot.
+pub type Create = unsafe extern "C" fn(spec: *const Spec, error: *const TextSink) -> *mut c_void;
+pub type Destroy = unsafe extern "C" fn(run: *mut c_void);
+/// [`crate::Simulator::run_while`]: [`FINISHED`], [`CUT`] or [`FAILED`].
+pub type RunWhile =
+    unsafe extern "C" fn(run: *mut c_void, sample: Sample, ctx: *mut c_void, error: *const TextSink) -> i32;
+pub type Time = unsafe extern "C" fn(run: *const c_void) -> f64;
+pub type GetStats = unsafe extern "C" fn(run: *const c_void) -> Stats;
+
+/// Everything a library offers, behind [`SYMBOL`].
+#[repr(C)]
+pub struct Api {
+    pub abi: u32,
+    /// The structure its step was generated for ([`super::fingerprint`]).
+    pub fingerprint: u64,
+    pub create: Create,
+    pub destroy: Destroy,
+    pub run_while: RunWhile,
+    pub time: Time,
+    pub stats: GetStats,
+}
+
+/// A generated step made into a library: its graphs are compiled with
+/// this registry. Implemented by [`crate::export_accelerated`].
+pub trait Exported: GeneratedStep {
+    fn registry() -> Registry;
+}
+
+impl Api {
+    /// The table for step `G`.
+    pub const fn of<G: Exported>() -> Api {
+        Api {
+            abi: ABI_VERSION,
+            fingerprint: G::FINGERPRINT,
+            create: create::<G>,
+            destroy: destroy::<G>,
+            run_while: run_while::<G>,
+            time: time::<G>,
+            stats: stats::<G>,
+        }
+    }
+}
+
+/// Makes a generated step `$step` a library for `--accelerate`: exports
+/// [`SYMBOL`], compiling graphs with the registry `$registry()`.
+#[macro_export]
+macro_rules! export_accelerated {
+    ($step:ty, $registry:path) => {
+        impl $crate::codegen::export::Exported for $step {
+            fn registry() -> $crate::Registry {
+                $registry()
+            }
+        }
+
+        /// The library's table of entry points.
+        #[unsafe(no_mangle)]
+        pub extern "C" fn ctlgraph_accelerated_v1() -> *const $crate::codegen::export::Api {
+            static API: $crate::codegen::export::Api = $crate::codegen::export::Api::of::<$step>();
+            &API
+        }
+    };
+}
+
+/// The panic's message, for an error.
+fn panic_text(payload: Box<dyn std::any::Any + Send>) -> String {
+    let what = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a panic".to_string());
+    format!("internal error in the accelerated run: {what}")
+}
+
+/// # Safety
+/// `spec` and `error` point to valid values for the call.
+unsafe fn prepare<G: Exported>(spec: &Spec) -> Result<Compiled<G>, String> {
+    // SAFETY: the loader passes strings it owns for the call.
+    let (text, file) = unsafe { (spec.text.text()?, spec.file.text()?) };
+    let pairs = if spec.n_sets == 0 {
+        &[][..]
+    } else {
+        // SAFETY: `sets` holds `2 * n_sets` strings.
+        unsafe { std::slice::from_raw_parts(spec.sets, 2 * spec.n_sets) }
+    };
+    let mut sets = Vec::with_capacity(spec.n_sets);
+    for pair in pairs.chunks_exact(2) {
+        // SAFETY: as above.
+        sets.push(unsafe { (pair[0].text()?.to_string(), pair[1].text()?.to_string()) });
+    }
+    let mut flat = crate::load_str(text, file.into(), &sets).map_err(|d| d.to_string())?;
+    if spec.has_seed {
+        flat.sim.seed = spec.seed;
+    }
+    let model = crate::compile(&flat, &G::registry()).map_err(|d| d.to_string())?;
+    Compiled::<G>::new(&model, (!spec.stop.is_nan()).then_some(spec.stop))
+}
+
+unsafe extern "C" fn create<G: Exported>(spec: *const Spec, error: *const TextSink) -> *mut c_void {
+    // SAFETY: the loader passes valid pointers for the call.
+    let (spec, error) = unsafe { (&*spec, &*error) };
+    // SAFETY: as above.
+    match catch_unwind(AssertUnwindSafe(|| unsafe { prepare::<G>(spec) })) {
+        Ok(Ok(run)) => Box::into_raw(Box::new(run)).cast(),
+        Ok(Err(why)) => {
+            error.send(&why);
+            std::ptr::null_mut()
+        }
+        Err(payload) => {
+            error.send(&panic_text(payload));
+            std::ptr::null_mut()
+        }
+    }
+}
+
+unsafe extern "C" fn destroy<G: Exported>(run: *mut c_void) {
+    if !run.is_null() {
+        // SAFETY: `run` came from `create::<G>` and is destroyed once.
+        let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(run.cast::<Compiled<G>>()) })));
+    }
+}
+
+unsafe extern "C" fn run_while<G: Exported>(
+    run: *mut c_void,
+    sample: Sample,
+    ctx: *mut c_void,
+    error: *const TextSink,
+) -> i32 {
+    // SAFETY: `run` came from `create::<G>`; the loader owns it alone.
+    let (run, error) = unsafe { (&mut *run.cast::<Compiled<G>>(), &*error) };
+    let result = catch_unwind(AssertUnwindSafe(|| {
+        run.run_while(|t, signals| {
+            // SAFETY: the loader's sample accepts the buffer for the call.
+            unsafe { sample(ctx, t, signals.as_ptr(), signals.len()) }
+        })
+    }));
+    match result {
+        Ok(Ok(true)) => FINISHED,
+        Ok(Ok(false)) => CUT,
+        Ok(Err(e)) => {
+            error.send(&e.to_string());
+            FAILED
+        }
+        Err(payload) => {
+            error.send(&panic_text(payload));
+            FAILED
+        }
+    }
+}
+
+unsafe extern "C" fn time<G: Exported>(run: *const c_void) -> f64 {
+    // SAFETY: `run` came from `create::<G>`.
+    unsafe { &*run.cast::<Compiled<G>>() }.time()
+}
+
+unsafe extern "C" fn stats<G: Exported>(run: *const c_void) -> Stats {
+    // SAFETY: `run` came from `create::<G>`.
+    unsafe { &*run.cast::<Compiled<G>>() }.stats().into()
+}

@@ -1,0 +1,153 @@
+//! A step library loaded (`libloading`) and the runs made from it, behind
+//! the C interface of [`ctlgraph_core::codegen::export`].
+
+use ctlgraph_core::codegen::export::{self, Api, Spec, Str, TextSink};
+use ctlgraph_core::{RunStats, SimError};
+use std::ffi::c_void;
+use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
+use std::path::Path;
+use std::sync::Arc;
+
+/// A loaded library: its runs hold it open.
+pub struct Library {
+    api: &'static Api,
+    // Dropped last: `api` points into it.
+    _lib: libloading::Library,
+}
+
+impl Library {
+    /// Opens the library at `path` and checks its interface version and
+    /// that its step was generated for `fingerprint`.
+    pub fn open(path: &Path, fingerprint: u64) -> Result<Arc<Library>, String> {
+        // SAFETY: the library is one ctlgraph built from generated code:
+        // its initialisers are Rust's (none run user code).
+        let lib =
+            unsafe { libloading::Library::new(path) }.map_err(|e| format!("cannot load {}: {e}", path.display()))?;
+        // SAFETY: the symbol is the exported `extern "C" fn() -> *const Api`.
+        let entry = unsafe { lib.get::<extern "C" fn() -> *const Api>(export::SYMBOL) }
+            .map_err(|e| format!("{} is not a ctlgraph step library: {e}", path.display()))?;
+        let api = entry();
+        // SAFETY: the table is a static in the library, which `_lib` keeps
+        // loaded for as long as `api` is used.
+        let api: &'static Api = unsafe { &*api };
+        if api.abi != export::ABI_VERSION {
+            return Err(format!(
+                "{} speaks interface version {}, this ctlgraph {}",
+                path.display(),
+                api.abi,
+                export::ABI_VERSION
+            ));
+        }
+        if api.fingerprint != fingerprint {
+            return Err(format!("{} was generated for another graph structure", path.display()));
+        }
+        Ok(Arc::new(Library { api, _lib: lib }))
+    }
+
+    /// A run of the graph `text` (read from `file`), as the program
+    /// compiled it: the same overrides, seed and stop time.
+    pub fn create(
+        self: &Arc<Self>,
+        text: &str,
+        file: &str,
+        sets: &[(String, String)],
+        seed: Option<u64>,
+        stop: Option<f64>,
+    ) -> Result<AcceleratedRun, String> {
+        let pairs: Vec<Str> = sets.iter().flat_map(|(n, v)| [Str::of(n), Str::of(v)]).collect();
+        let spec = Spec {
+            text: Str::of(text),
+            file: Str::of(file),
+            sets: pairs.as_ptr(),
+            n_sets: sets.len(),
+            has_seed: seed.is_some(),
+            seed: seed.unwrap_or(0),
+            stop: stop.unwrap_or(f64::NAN),
+        };
+        let mut message = String::new();
+        let sink = text_sink(&mut message);
+        // SAFETY: `spec` and `sink` outlive the call.
+        let run = unsafe { (self.api.create)(&spec, &sink) };
+        if run.is_null() {
+            return Err(message);
+        }
+        Ok(AcceleratedRun { lib: Arc::clone(self), run })
+    }
+}
+
+/// A run inside a library.
+pub struct AcceleratedRun {
+    lib: Arc<Library>,
+    run: *mut c_void,
+}
+
+// SAFETY: the run is owned by this value alone; the library's runs share
+// no state (a run is the generated step, its blocks and the driver's state).
+unsafe impl Send for AcceleratedRun {}
+
+impl Drop for AcceleratedRun {
+    fn drop(&mut self) {
+        // SAFETY: `run` came from this library's `create` and is destroyed once.
+        unsafe { (self.lib.api.destroy)(self.run) }
+    }
+}
+
+impl AcceleratedRun {
+    pub fn time(&self) -> f64 {
+        // SAFETY: `run` is live.
+        unsafe { (self.lib.api.time)(self.run) }
+    }
+
+    pub fn stats(&self) -> RunStats {
+        // SAFETY: `run` is live.
+        unsafe { (self.lib.api.stats)(self.run) }.into()
+    }
+
+    /// [`ctlgraph_core::Simulator::run_while`], in the library. A panic in
+    /// `sink` is carried over the library and resumed here.
+    pub fn run_while(&mut self, sink: &mut dyn FnMut(f64, &[f64]) -> bool) -> Result<bool, SimError> {
+        let mut state = SampleState { sink, panic: None };
+        let mut message = String::new();
+        let error = text_sink(&mut message);
+        // SAFETY: `run` is live; `state` and `error` outlive the call.
+        let answer = unsafe { (self.lib.api.run_while)(self.run, sample, (&raw mut state).cast::<c_void>(), &error) };
+        if let Some(payload) = state.panic {
+            resume_unwind(payload);
+        }
+        match answer {
+            export::FINISHED => Ok(true),
+            export::CUT => Ok(false),
+            _ => Err(SimError::Reported(message)),
+        }
+    }
+}
+
+/// The sink behind [`sample`], and a panic it raised.
+struct SampleState<'a> {
+    sink: &'a mut dyn FnMut(f64, &[f64]) -> bool,
+    panic: Option<Box<dyn std::any::Any + Send>>,
+}
+
+unsafe extern "C" fn sample(ctx: *mut c_void, t: f64, signals: *const f64, len: usize) -> bool {
+    // SAFETY: `ctx` is the `SampleState` of the `run_while` call in progress.
+    let state = unsafe { &mut *ctx.cast::<SampleState>() };
+    // SAFETY: the library passes its signal buffer for the call.
+    let signals = unsafe { std::slice::from_raw_parts(signals, len) };
+    match catch_unwind(AssertUnwindSafe(|| (state.sink)(t, signals))) {
+        Ok(go_on) => go_on,
+        Err(payload) => {
+            state.panic = Some(payload);
+            false
+        }
+    }
+}
+
+/// A sink appending the library's messages to `message`.
+fn text_sink(message: &mut String) -> TextSink {
+    unsafe extern "C" fn write(ctx: *mut c_void, text: *const u8, len: usize) {
+        // SAFETY: `ctx` is the `String` given to `text_sink`; `text` holds `len` bytes.
+        let (message, bytes) = unsafe { (&mut *ctx.cast::<String>(), std::slice::from_raw_parts(text, len)) };
+        message.push_str(&String::from_utf8_lossy(bytes));
+    }
+    TextSink { ctx: (message as *mut String).cast(), write }
+}

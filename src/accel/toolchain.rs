@@ -1,0 +1,157 @@
+//! Building a generated step into a shared library with cargo, and the
+//! cache that keeps the libraries.
+//!
+//! The cache (`$CTLGRAPH_CACHE_DIR`, else `$XDG_CACHE_HOME/ctlgraph`, else
+//! `~/.cache/ctlgraph`) holds, under `accelerate/`:
+//! - `lib/<key>.so`: one library per step, `key` hashing the generated
+//!   code, ctlgraph's version, the compiler's and the source's hash — a
+//!   graph whose structure is unchanged finds its library there and loads
+//!   it without calling cargo;
+//! - `crates/<key>/`: the crate each library was built from: the generated
+//!   step, a three-line `lib.rs` exporting it, and a manifest depending on
+//!   ctlgraph's crates by path (the source this program was built from);
+//! - `target/`: one cargo target directory for all of them, so ctlgraph's
+//!   crates and their dependencies are compiled once (the first build on a
+//!   machine) and each later graph compiles only its own crate.
+
+use super::source;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+/// The compiler that built this program (`rustc -V`), recorded by `build.rs`.
+pub const RUSTC_VERSION: &str = env!("CTLGRAPH_RUSTC_VERSION");
+/// The hash of the source of ctlgraph's crates this program was built from.
+const SOURCE_HASH: &str = env!("CTLGRAPH_SOURCE_HASH");
+/// The workspace this program was built from: its crates are the library's.
+const SOURCE_DIR: &str = env!("CARGO_MANIFEST_DIR");
+
+/// The cache's folder for step libraries.
+pub fn cache_dir() -> Result<PathBuf, String> {
+    let var = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty()).map(PathBuf::from);
+    let base = var("CTLGRAPH_CACHE_DIR")
+        .or_else(|| var("XDG_CACHE_HOME").map(|d| d.join("ctlgraph")))
+        .or_else(|| var("HOME").map(|d| d.join(".cache").join("ctlgraph")))
+        .ok_or("no cache folder: set CTLGRAPH_CACHE_DIR (or XDG_CACHE_HOME or HOME)")?;
+    Ok(base.join("accelerate"))
+}
+
+/// The library's name in the cache for the generated `code`.
+pub fn key(code: &str) -> String {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    for part in [code, env!("CARGO_PKG_VERSION"), RUSTC_VERSION, SOURCE_HASH] {
+        h.update(part.as_bytes());
+        h.update([0]);
+    }
+    h.finalize().iter().take(8).map(|b| format!("{b:02x}")).collect()
+}
+
+/// Where the library for `key` lives in the cache `dir`.
+pub fn library_path(dir: &Path, key: &str) -> PathBuf {
+    dir.join("lib").join(format!("{}{key}{}", std::env::consts::DLL_PREFIX, std::env::consts::DLL_SUFFIX))
+}
+
+/// Why this machine cannot build a library now, if it cannot: no cargo,
+/// another compiler than the one that built ctlgraph, or ctlgraph's source
+/// gone or changed since.
+fn unable() -> Option<String> {
+    let version = |tool: &str| {
+        Command::new(tool)
+            .arg("-V")
+            .output()
+            .ok()
+            .filter(|out| out.status.success())
+            .map(|out| String::from_utf8_lossy(&out.stdout).trim().to_string())
+    };
+    if version("cargo").is_none() {
+        return Some("no Rust toolchain: `cargo` is not on PATH".to_string());
+    }
+    match version("rustc") {
+        None => return Some("no Rust toolchain: `rustc` is not on PATH".to_string()),
+        Some(v) if v != RUSTC_VERSION => {
+            return Some(format!("the Rust compiler on PATH is `{v}`, ctlgraph was built by `{RUSTC_VERSION}`"));
+        }
+        Some(_) => {}
+    }
+    match source::source_hash(Path::new(SOURCE_DIR)) {
+        Err(e) => Some(format!("ctlgraph's source is not at {SOURCE_DIR} ({e}): the step is built against it")),
+        Ok(h) if format!("{h:016x}") != SOURCE_HASH => Some(format!(
+            "ctlgraph's source at {SOURCE_DIR} changed since this program was built: rebuild ctlgraph first"
+        )),
+        Ok(_) => None,
+    }
+}
+
+/// Builds the library for `key` from the generated `code` into the cache
+/// `dir`; returns the build's wall time in seconds.
+pub fn build(dir: &Path, key: &str, code: &str) -> Result<f64, String> {
+    if let Some(why) = unable() {
+        return Err(why);
+    }
+    let start = Instant::now();
+    let krate = dir.join("crates").join(key);
+    std::fs::create_dir_all(&krate).map_err(io(&krate))?;
+    let name = format!("ctlgraph_step_{key}");
+    let source = Path::new(SOURCE_DIR);
+    let files =
+        [("Cargo.toml", manifest(&name, source)), ("lib.rs", LIB_RS.to_string()), ("step.rs", code.to_string())];
+    for (file, text) in files {
+        std::fs::write(krate.join(file), text).map_err(io(&krate.join(file)))?;
+    }
+    // The versions ctlgraph was built and tested with, so the step's
+    // dependencies are those and no index is needed (`--offline`).
+    let lock = krate.join("Cargo.lock");
+    std::fs::copy(source.join("Cargo.lock"), &lock).map_err(io(&lock))?;
+    let target = dir.join("target");
+    let out = Command::new("cargo")
+        .args(["build", "--release", "--offline", "--lib", "--quiet", "--manifest-path"])
+        .arg(krate.join("Cargo.toml"))
+        .env("CARGO_TARGET_DIR", &target)
+        .env_remove("CARGO_BUILD_TARGET_DIR")
+        .output()
+        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    if !out.status.success() {
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let last: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+        let tail = last[last.len().saturating_sub(3)..].join(" / ");
+        return Err(format!("cargo could not build the step (in {}): {tail}", krate.display()));
+    }
+    let built =
+        target.join("release").join(format!("{}{name}{}", std::env::consts::DLL_PREFIX, std::env::consts::DLL_SUFFIX));
+    let dest = library_path(dir, key);
+    let lib_dir = dest.parent().unwrap_or(dir);
+    std::fs::create_dir_all(lib_dir).map_err(io(lib_dir))?;
+    // Copied under a temporary name and renamed: a library in `lib/` is
+    // always whole, also for another ctlgraph building the same one.
+    let partial = lib_dir.join(format!(".{key}.{}.partial", std::process::id()));
+    std::fs::copy(&built, &partial).map_err(io(&partial))?;
+    std::fs::rename(&partial, &dest).map_err(io(&dest))?;
+    Ok(start.elapsed().as_secs_f64())
+}
+
+/// The error for a file that cannot be written.
+fn io(what: &Path) -> impl FnOnce(std::io::Error) -> String + '_ {
+    move |e| format!("cannot write {}: {e}", what.display())
+}
+
+/// The library crate's `lib.rs`: the generated step, exported.
+const LIB_RS: &str = "#[allow(clippy::all, unused)]\nmod step;\n\
+                      ctlgraph_core::export_accelerated!(step::Step, ctlgraph_blocks::registry);\n";
+
+/// The library crate's manifest. Its own workspace (a cache inside another
+/// project's folder must not join that workspace); one codegen unit, so
+/// the step's calls into the blocks inline as in a crate of the workspace.
+fn manifest(name: &str, source: &Path) -> String {
+    let path = |krate: &str| source.join(krate).display().to_string().replace('\\', "/");
+    format!(
+        "[package]\nname = \"{name}\"\nversion = \"0.0.0\"\nedition = \"2024\"\npublish = false\n\n\
+         [lib]\npath = \"lib.rs\"\ncrate-type = [\"cdylib\"]\n\n\
+         [dependencies]\nctlgraph-core = {{ path = \"{}\" }}\nctlgraph-blocks = {{ path = \"{}\" }}\n\n\
+         [profile.release]\ndebug = false\n\n\
+         [profile.release.package.{name}]\ncodegen-units = 1\n\n\
+         [workspace]\n",
+        path("graph-core"),
+        path("blocks"),
+    )
+}

@@ -1,0 +1,109 @@
+//! `--accelerate` as a user runs it: the generated step built by the real
+//! cargo into a cache, loaded and run, giving the interpreter's CSV byte
+//! for byte; the cache reused without a toolchain; the fallback and its
+//! one line; `require` failing with exit code 2.
+//!
+//! The cache lives under the test's target folder, so a second `cargo
+//! test` reuses it; a clean one (CI) builds ctlgraph's crates into it once
+//! (about a minute and a half on two cores) and each graph in about a second.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The cache the tests share.
+fn cache() -> PathBuf {
+    Path::new(env!("CARGO_TARGET_TMPDIR")).join("accelerate-cache")
+}
+
+/// `ctlgraph ARGS` in the workspace with the given cache and PATH.
+fn ctlgraph(args: &[&str], cache: &Path, path: Option<&str>) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_ctlgraph"));
+    cmd.args(args).current_dir(env!("CARGO_MANIFEST_DIR")).env("CTLGRAPH_CACHE_DIR", cache).env("CI", "1");
+    if let Some(p) = path {
+        cmd.env("PATH", p);
+    }
+    cmd.output().unwrap()
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// Runs `graph` interpreted and accelerated (required) and returns both
+/// CSVs and the accelerated run's summary.
+fn both_ways(graph: &str, dir: &Path) -> (Vec<u8>, Vec<u8>, String) {
+    let name = graph.replace('/', "_");
+    let (interpreted, accelerated) = (dir.join(format!("{name}.i.csv")), dir.join(format!("{name}.a.csv")));
+    let out = ctlgraph(&["run", graph, "--out", interpreted.to_str().unwrap()], &cache(), None);
+    assert!(out.status.success(), "{graph}: {}", text(&out.stderr));
+    let out = ctlgraph(&["run", graph, "--accelerate=require", "--out", accelerated.to_str().unwrap()], &cache(), None);
+    assert!(out.status.success(), "{graph} accelerated: {}", text(&out.stderr));
+    (std::fs::read(interpreted).unwrap(), std::fs::read(accelerated).unwrap(), text(&out.stdout))
+}
+
+#[test]
+fn accelerated_runs_write_the_interpreters_csv_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    // Fixed-step with sample clocks and noise; adaptive; stiff (TR-BDF2);
+    // a transport delay under an adaptive method (history, breakpoints).
+    for graph in [
+        "graphs/fladrc/ladrc.yaml",
+        "graphs/tutorial/pid_loop.yaml",
+        "graphs/stiff/van_der_pol.yaml",
+        "graphs/events/dead_time_pi.yaml",
+    ] {
+        let (interpreted, accelerated, summary) = both_ways(graph, dir.path());
+        assert!(interpreted.len() > 1000, "{graph}: a CSV of {} bytes", interpreted.len());
+        assert!(interpreted == accelerated, "{graph}: the accelerated CSV differs from the interpreted one");
+        assert!(summary.contains(", accelerated (step "), "{graph}: {summary}");
+    }
+}
+
+#[test]
+fn a_cached_step_loads_without_a_toolchain_and_serves_other_parameter_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = "graphs/tutorial/first_order.yaml";
+    let out = ctlgraph(&["run", graph, "--accelerate=require"], &cache(), None);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    // With no cargo to call, the run can only be accelerated from the cache;
+    // `--set` changes values, not the structure, so the same step serves it.
+    let csv = dir.path().join("tau.csv");
+    let args = ["run", graph, "--accelerate=require", "--set", "tau=0.25", "--out", csv.to_str().unwrap()];
+    let out = ctlgraph(&args, &cache(), Some("/nonexistent"));
+    let summary = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(summary.contains("accelerated (step loaded from the cache in "), "{summary}");
+    let interpreted = dir.path().join("tau.i.csv");
+    let out = ctlgraph(&["run", graph, "--set", "tau=0.25", "--out", interpreted.to_str().unwrap()], &cache(), None);
+    assert!(out.status.success());
+    assert_eq!(std::fs::read(csv).unwrap(), std::fs::read(interpreted).unwrap());
+}
+
+#[test]
+fn without_a_toolchain_the_run_is_interpreted_and_says_why_in_one_line() {
+    let empty = tempfile::tempdir().unwrap();
+    let graph = "graphs/fladrc/ladrc.yaml";
+    let out = ctlgraph(&["run", graph, "--accelerate"], empty.path(), Some("/nonexistent"));
+    assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
+    assert_eq!(
+        text(&out.stderr),
+        "note: running interpreted, not accelerated: no Rust toolchain: `cargo` is not on PATH\n"
+    );
+    assert!(!text(&out.stdout).contains("accelerated"));
+    let out = ctlgraph(&["run", graph, "--accelerate=require"], empty.path(), Some("/nonexistent"));
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("--accelerate=require: cannot accelerate: no Rust toolchain"));
+}
+
+#[test]
+fn a_graph_the_generated_step_does_not_cover_runs_interpreted_naming_the_block() {
+    let graph = "graphs/events/bouncing_ball.yaml";
+    let out = ctlgraph(&["run", graph, "--accelerate"], &cache(), None);
+    assert!(out.status.success());
+    let note = text(&out.stderr);
+    assert!(note.starts_with("note: running interpreted, not accelerated: the generated step does not cover"));
+    assert!(note.contains("block `vel` (integrator) has zero crossings"), "{note}");
+    assert_eq!(note.lines().count(), 1);
+    let out = ctlgraph(&["run", graph, "--accelerate=require"], &cache(), None);
+    assert_eq!(out.status.code(), Some(2));
+}
