@@ -7,6 +7,7 @@
 //!     cargo bench --bench sweep
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use ctlgraph::accel::Runner;
 use ctlgraph::sweep::{self, Keep, SweepSpec, Vary};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -29,7 +30,11 @@ fn bench(c: &mut Criterion) {
     group.sample_size(20);
     for jobs in [1, 2] {
         group.bench_function(format!("jobs_{jobs}"), |b| {
-            b.iter(|| sweep::run(&text, file, &names, &cases, jobs, &keep, &stop, &|| {}).expect("runs").len())
+            b.iter(|| {
+                sweep::run(&Runner::Interpreted, &text, file, &names, &cases, jobs, &keep, &stop, &|| {})
+                    .expect("runs")
+                    .len()
+            })
         });
     }
     group.finish();

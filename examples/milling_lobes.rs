@@ -90,9 +90,18 @@ fn simulate() -> Res<Vec<(f64, f64, bool, bool)>> {
     let jobs = std::thread::available_parallelism().map_or(1, |n| n.get());
     let keep = Keep { traces_dir: None, in_memory: &|_| false };
     eprintln!("{} cases on {jobs} threads …", cases.len());
-    let rows =
-        ctlgraph::sweep::run(&text, Path::new(GRAPH), &names, &cases, jobs, &keep, &AtomicBool::new(false), &|| {})
-            .map_err(|e| e.to_string())?;
+    let rows = ctlgraph::sweep::run(
+        &ctlgraph::accel::Runner::Interpreted,
+        &text,
+        Path::new(GRAPH),
+        &names,
+        &cases,
+        jobs,
+        &keep,
+        &AtomicBool::new(false),
+        &|| {},
+    )
+    .map_err(|e| e.to_string())?;
     Ok(rows
         .iter()
         .map(|row| {

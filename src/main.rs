@@ -9,12 +9,13 @@ mod run_cmd;
 mod sweep_cmd;
 
 use clap::{Parser, Subcommand};
-use ctlgraph::accel::Mode;
+use ctlgraph::accel::Accelerate;
 use ctlgraph::prop::{PropConfig, PropOutcome, Vary};
 use ctlgraph::suite::Failure;
 use ctlgraph_core::flatten::parse_set;
 use ctlgraph_core::{Diagnostic, Model, Simulator};
 use progress::CaseProgress;
+use run_cmd::AccelerateArg;
 use run_cmd::RunOptions;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -84,17 +85,16 @@ enum Command {
         /// End the run after this many seconds of wall time (exit 1; the outputs hold what was simulated).
         #[arg(long, value_name = "SECONDS")]
         max_wall: Option<f64>,
-        /// Run the graph's generated step, built once with cargo and cached: `on` (the bare flag) runs
-        /// interpreted with a note when it cannot, `require` makes that an error, `off` interprets.
-        #[arg(long, value_name = "on|require|off", num_args = 0..=1, default_missing_value = "on",
-              require_equals = true, value_parser = Mode::parse)]
-        accelerate: Option<Mode>,
+        #[command(flatten)]
+        accelerate: AccelerateArg,
     },
     /// Run every graph with `checks:` under the given files or folders.
     #[command(after_help = "Example:\n  ctlgraph test graphs/tutorial graphs/fladrc/compare.yaml")]
     Test {
         /// Graph files or folders (default: graphs/).
         paths: Vec<PathBuf>,
+        #[command(flatten)]
+        accelerate: AccelerateArg,
     },
     /// Property-test a graph: vary parameters, run its checks, shrink failures.
     #[command(
@@ -115,6 +115,8 @@ enum Command {
         /// Seed of the drawing (same seed, same cases).
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        #[command(flatten)]
+        accelerate: AccelerateArg,
     },
     /// Run a designed set of cases (grid, list, random draws, seeds) in parallel and tabulate their checks.
     #[command(
@@ -249,13 +251,15 @@ fn main() -> ExitCode {
                     seed,
                     max_steps,
                     max_wall,
-                    accelerate: accelerate.unwrap_or_default(),
+                    accelerate: accelerate.accelerate,
                 },
                 &sets,
             )
         }
-        Command::Test { paths } => test(paths),
-        Command::Prop { graph, vary, vary_seed, cases, seed } => prop(&graph, &vary, vary_seed, cases, seed),
+        Command::Test { paths, accelerate } => test(paths, accelerate.accelerate),
+        Command::Prop { graph, vary, vary_seed, cases, seed, accelerate } => {
+            prop(&graph, PropConfig { vary: Vec::new(), vary_seed, cases, seed }, &vary, accelerate.accelerate)
+        }
         Command::Sweep { merge: Some(SweepMerge::Merge { tables, out }), .. } => sweep_merge(&tables, &out),
         Command::Sweep { merge: None, graph: Some(graph), args } => sweep(&graph, args),
         Command::Sweep { merge: None, graph: None, .. } => {
@@ -455,14 +459,19 @@ fn blocks(ty: Option<&str>) -> Result<(), Failure> {
     Ok(())
 }
 
-fn test(paths: Vec<PathBuf>) -> Result<(), Failure> {
+fn test(paths: Vec<PathBuf>, accelerate: Option<Accelerate>) -> Result<(), Failure> {
     let paths = if paths.is_empty() { vec![PathBuf::from("graphs")] } else { paths };
     let graphs = ctlgraph::suite::discover(&paths)?;
     let start = Instant::now();
-    let outcomes = ctlgraph::suite::run_all(&graphs);
+    let outcomes = ctlgraph::suite::run_all(&graphs, accelerate);
     let (mut passed, mut failed, mut broken, mut invalid) = (0, 0, 0, false);
     for o in &outcomes {
         println!("{}", o.path.display());
+        match &o.accelerated {
+            Some(Ok(cost)) => println!("  accelerated ({cost})"),
+            Some(Err(why)) => println!("  note: running interpreted, not accelerated: {why}"),
+            None => {}
+        }
         match &o.result {
             Ok(results) => {
                 for r in results {
@@ -497,12 +506,16 @@ fn test(paths: Vec<PathBuf>) -> Result<(), Failure> {
     }
 }
 
-fn prop(graph: &Path, vary: &[String], vary_seed: bool, cases: u32, seed: u64) -> Result<(), Failure> {
-    let vary = vary.iter().map(|v| Vary::parse(v)).collect::<Result<Vec<_>, _>>()?;
-    let ranges: Vec<String> = vary.iter().map(|v| format!("{} in [{}, {}]", v.name, v.lo, v.hi)).collect();
-    let cfg = PropConfig { vary, vary_seed, cases, seed };
+fn prop(graph: &Path, mut cfg: PropConfig, vary: &[String], accelerate: Option<Accelerate>) -> Result<(), Failure> {
+    cfg.vary = vary.iter().map(|v| Vary::parse(v)).collect::<Result<Vec<_>, _>>()?;
+    let (runner, note) = ctlgraph::suite::runner_for(accelerate, &ctlgraph::compile_file(graph, &[])?, graph)?;
+    if let Some(why) = note {
+        eprintln!("note: running interpreted, not accelerated: {why}");
+    }
+    let (cases, vary_seed) = (cfg.cases, cfg.vary_seed);
+    let ranges: Vec<String> = cfg.vary.iter().map(|v| format!("{} in [{}, {}]", v.name, v.lo, v.hi)).collect();
     let bar = CaseProgress::new(cases as usize);
-    let outcome = ctlgraph::prop::run(graph, &cfg, &|| bar.tick());
+    let outcome = ctlgraph::prop::run(&runner, graph, &cfg, &|| bar.tick());
     bar.finish();
     match outcome? {
         PropOutcome::Held { cases } => {

@@ -3,7 +3,8 @@
 //! shrink it toward the graph's own (nominal) values with proptest's value
 //! trees, so the report is the smallest failing change.
 
-use crate::suite::{Failure, run_checks};
+use crate::accel::Runner;
+use crate::suite::{Failure, run_checks_by};
 use ctlgraph_core::Diagnostic;
 use ctlgraph_core::checks::CheckResult;
 use proptest::strategy::{BoxedStrategy, Strategy, ValueTree};
@@ -76,24 +77,24 @@ pub enum PropOutcome {
     Failed { minimal: Case, reason: Result<Vec<CheckResult>, Failure>, after: u32, shrink_steps: u32 },
 }
 
-/// Runs one case: the graph with the case's overrides; `Ok(false)` when a
-/// check fails or the run fails.
-fn evaluate(graph: &Path, case: &Case) -> (bool, Result<Vec<CheckResult>, Failure>) {
+/// Runs one case by `runner`: the graph with the case's overrides;
+/// `Ok(false)` when a check fails or the run fails.
+fn evaluate(runner: &Runner, graph: &Path, case: &Case) -> (bool, Result<Vec<CheckResult>, Failure>) {
     let sets: Vec<(String, String)> = case.values.iter().map(|(n, v)| (n.clone(), v.to_string())).collect();
     let result = crate::compile_file_seeded(graph, &sets, case.seed)
         .map_err(Failure::from)
-        .and_then(|model| run_checks(model, None).map(|(_, r)| r));
+        .and_then(|model| run_checks_by(runner, model, &sets, case.seed, None).map(|(_, r)| r));
     let passed = matches!(&result, Ok(r) if r.iter().all(|c| c.passed));
     (passed, result)
 }
 
 /// Draws `cases` parameter sets, runs them in parallel, and shrinks the
 /// first failure (in draw order, so results do not depend on scheduling).
-/// Runs the property test; `tick` is called after every run of the graph
-/// (the drawn cases, then each shrinking step), for progress display.
-pub fn run(graph: &Path, cfg: &PropConfig, tick: &(dyn Fn() + Sync)) -> Result<PropOutcome, Failure> {
+/// Runs the property test by `runner`; `tick` is called after every run of
+/// the graph (the drawn cases, then each shrinking step), for progress display.
+pub fn run(runner: &Runner, graph: &Path, cfg: &PropConfig, tick: &(dyn Fn() + Sync)) -> Result<PropOutcome, Failure> {
     let evaluate = |graph: &Path, case: &Case| {
-        let verdict = evaluate(graph, case);
+        let verdict = evaluate(runner, graph, case);
         tick();
         verdict
     };

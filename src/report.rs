@@ -29,6 +29,9 @@ pub struct RunInfo<'a> {
     pub parameters: &'a [(String, f64)],
     /// The `--set` overrides as given.
     pub overrides: &'a [(String, String)],
+    /// Under `--accelerate`: what preparing the step cost, or why the run
+    /// was interpreted.
+    pub acceleration: Option<Result<crate::accel::Cost, String>>,
 }
 
 /// SHA-256 of the graph file, lowercase hex.
@@ -75,6 +78,12 @@ pub fn to_json(info: &RunInfo) -> Value {
         "stop_time": info.stop,
         "simulated_time": info.simulated,
         "wall_time_seconds": info.wall_seconds,
+        "acceleration": match &info.acceleration {
+            None => Value::Null,
+            Some(Ok(crate::accel::Cost::Built(s))) => json!({ "step": "built", "seconds": s }),
+            Some(Ok(crate::accel::Cost::Loaded(s))) => json!({ "step": "loaded", "seconds": s }),
+            Some(Err(why)) => json!({ "step": null, "interpreted_because": why }),
+        },
         "checks": info.checks.iter().map(|c| json!({
             "name": c.name, "measured": c.measured, "op": c.op.symbol(), "bound": c.bound, "passed": c.passed,
         })).collect::<Vec<_>>(),

@@ -5,7 +5,7 @@
 
 use crate::interrupt;
 use crate::progress::Progress;
-use ctlgraph::accel::{self, AcceleratedRun, Cost, Mode};
+use ctlgraph::accel::{Accelerate, AcceleratedRun, Cost};
 use ctlgraph::html::Report;
 use ctlgraph::record::{CsvFile, Number, Recorder, Trace, write_atomic};
 use ctlgraph::report::{RunInfo, to_json};
@@ -14,6 +14,17 @@ use ctlgraph_core::flatten::parse_set;
 use ctlgraph_core::{Diagnostic, RunStats, Simulator};
 use std::path::Path;
 use std::time::Instant;
+
+/// `--accelerate[=on|require|off]`, shared by run, test, prop and sweep.
+#[derive(clap::Args, Clone, Copy)]
+pub(crate) struct AccelerateArg {
+    /// Run the graph's generated step, built once with cargo and cached (overrides
+    /// `simulation.accelerate`): `on` (the bare flag) runs interpreted with a note when it
+    /// cannot, `require` makes that an error, `off` interprets.
+    #[arg(long, value_name = "on|require|off", num_args = 0..=1, default_missing_value = "on",
+          require_equals = true, value_parser = Accelerate::parse)]
+    pub accelerate: Option<Accelerate>,
+}
 
 /// What `run` writes besides the summary line, and its budgets.
 pub(crate) struct RunOptions<'a> {
@@ -25,7 +36,8 @@ pub(crate) struct RunOptions<'a> {
     pub seed: Option<u64>,
     pub max_steps: Option<u64>,
     pub max_wall: Option<f64>,
-    pub accelerate: Mode,
+    /// `--accelerate`, when given (else the graph's `simulation.accelerate`).
+    pub accelerate: Option<Accelerate>,
 }
 
 /// Block-steps (major steps × blocks) above which a run is announced as
@@ -108,7 +120,7 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
     let model = ctlgraph::compile_flat(&flat, &ctlgraph::registry())?;
     let seed = model.sim.seed;
     let mut sim = Simulator::new(model, opts.stop_time);
-    let mut accelerated = accelerated(opts.accelerate, &sim, graph, &sets, opts.seed, opts.stop_time)?;
+    let mut engine = engine(opts.accelerate, &sim, graph, &sets, opts.seed, opts.stop_time)?;
     if let Some(w) = long_run_warning(&sim) {
         eprintln!("warning: {w}");
     }
@@ -157,16 +169,17 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
         }
         cut.is_none()
     };
-    let result = match accelerated.as_mut() {
-        Some((run, _)) => run.run_while(&mut sink),
+    let result = match engine.accelerated.as_mut() {
+        Some(run) => run.run_while(&mut sink),
         None => sim.run_while(&mut sink),
     };
     recorder.flush(&mut emit);
     progress.finish();
     let wall = start.elapsed().as_secs_f64();
-    let reached = match &accelerated {
-        Some((run, cost)) => Reached { time: run.time(), stats: run.stats(), cost: Some(*cost) },
-        None => Reached { time: sim.time(), stats: sim.stats(), cost: None },
+    let cost = engine.acceleration.as_ref().and_then(|a| a.as_ref().ok().copied());
+    let reached = match &engine.accelerated {
+        Some(run) => Reached { time: run.time(), stats: run.stats(), cost },
+        None => Reached { time: sim.time(), stats: sim.stats(), cost },
     };
     // A run that reached its stop time has no cut, even if one was asked
     // for at its last step.
@@ -209,6 +222,7 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
             blocks: &sim.model().meta,
             parameters: &sim.model().parameters,
             overrides: &sets,
+            acceleration: engine.acceleration.clone(),
         };
         let json = to_json(&info);
         if let Some(path) = opts.report {
@@ -259,37 +273,43 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
     }
 }
 
-/// Where the run got to, whichever ran it, and what an accelerated run's
-/// preparation cost.
+/// Where the run got to, whichever ran it, and what preparing an
+/// accelerated run cost.
 struct Reached {
     time: f64,
     stats: RunStats,
     cost: Option<Cost>,
 }
 
-/// The accelerated run `mode` asks for, when it can be had; otherwise
-/// `None` after a note why (or, under `require`, that reason as the error).
-fn accelerated(
-    mode: Mode,
+/// What runs the graph: its step library, or (when `accelerated` is
+/// `None`) the interpreter.
+struct Engine {
+    accelerated: Option<AcceleratedRun>,
+    /// When acceleration was asked for: what preparing the step cost, or
+    /// why the run is interpreted.
+    acceleration: Option<Result<Cost, String>>,
+}
+
+/// The engine `--accelerate` (or the graph's own setting) asks for; a run
+/// that cannot be accelerated is interpreted after a note why (under
+/// `require`, that reason is the error).
+fn engine(
+    flag: Option<Accelerate>,
     sim: &Simulator,
     graph: &Path,
     sets: &[(String, String)],
     seed: Option<u64>,
     stop: Option<f64>,
-) -> Result<Option<(AcceleratedRun, Cost)>, Failure> {
-    if mode == Mode::Off {
-        return Ok(None);
+) -> Result<Engine, Failure> {
+    let (runner, note) = ctlgraph::suite::runner_for(flag, sim.model(), graph)?;
+    if let Some(why) = &note {
+        eprintln!("note: running interpreted, not accelerated: {why}");
     }
-    match accel::run(sim.model(), graph, sets, seed, stop) {
-        Ok(run) => Ok(Some(run)),
-        Err(why) if mode == Mode::Require => {
-            Err(Diagnostic::plain(format!("--accelerate=require: cannot accelerate: {why}")).into())
-        }
-        Err(why) => {
-            eprintln!("note: running interpreted, not accelerated: {why}");
-            Ok(None)
-        }
-    }
+    let accelerated = runner
+        .start(sets, seed, stop)
+        .map_err(|why| Failure::Run(format!("the accelerated step cannot run the graph: {why}")))?;
+    let acceleration = runner.cost().map(Ok).or(note.map(Err));
+    Ok(Engine { accelerated, acceleration })
 }
 
 fn cut_message(cut: Cut, sim: &Simulator, reached: &Reached) -> String {

@@ -2,6 +2,7 @@
 //! find every graph with checks under some paths and run them in parallel
 //! (`ctlgraph test`).
 
+use crate::accel::{Accelerate, Runner};
 use crate::record::Trace;
 use ctlgraph_core::checks::CheckResult;
 use ctlgraph_core::spec::GraphFile;
@@ -47,8 +48,20 @@ impl From<Diagnostic> for Failure {
 
 /// Simulates a compiled model and evaluates its checks.
 pub fn run_checks(model: Model, stop: Option<f64>) -> Result<(Trace, Vec<CheckResult>), Failure> {
+    run_checks_by(&Runner::Interpreted, model, &[], None, stop)
+}
+
+/// [`run_checks`] for a model `runner`'s graph compiled with `sets` and
+/// `seed` (which an accelerated runner's library compiles likewise).
+pub fn run_checks_by(
+    runner: &Runner,
+    model: Model,
+    sets: &[(String, String)],
+    seed: Option<u64>,
+    stop: Option<f64>,
+) -> Result<(Trace, Vec<CheckResult>), Failure> {
     let checks = model.checks.clone();
-    let trace = crate::simulate(model, stop).map_err(|e| Failure::Run(e.to_string()))?;
+    let (trace, _) = runner.simulate(model, sets, seed, stop).map_err(|e| Failure::Run(e.to_string()))?;
     let results = checks.iter().map(|c| trace.check(c)).collect();
     Ok((trace, results))
 }
@@ -57,6 +70,9 @@ pub fn run_checks(model: Model, stop: Option<f64>) -> Result<(Trace, Vec<CheckRe
 pub struct GraphOutcome {
     pub path: PathBuf,
     pub result: Result<Vec<CheckResult>, Failure>,
+    /// Under `--accelerate`: what preparing the step cost, or why the graph
+    /// ran interpreted.
+    pub accelerated: Option<Result<crate::accel::Cost, String>>,
 }
 
 /// Graph files (`.yaml`, `.yml`) under `paths`, sorted, that have checks.
@@ -100,11 +116,13 @@ fn has_checks(path: &Path) -> bool {
     GraphFile::parse(&text, path.display().to_string().into()).map_or(true, |g| !g.checks.is_empty())
 }
 
-/// Runs every graph (in parallel) and evaluates its checks.
-pub fn run_all(graphs: &[PathBuf]) -> Vec<GraphOutcome> {
+/// Runs every graph (in parallel) and evaluates its checks; `accelerate`
+/// (when given) overrides each graph's `simulation.accelerate`.
+pub fn run_all(graphs: &[PathBuf], accelerate: Option<Accelerate>) -> Vec<GraphOutcome> {
     graphs
         .par_iter()
         .map(|path| {
+            let mut accelerated = None;
             let result = crate::compile_file(path, &[])
                 .map_err(Failure::from)
                 .and_then(|model| {
@@ -114,10 +132,32 @@ pub fn run_all(graphs: &[PathBuf]) -> Vec<GraphOutcome> {
                             "has no `checks:` to test",
                         )));
                     }
-                    run_checks(model, None)
+                    let (runner, note) = runner_for(accelerate, &model, path)?;
+                    accelerated = match (runner.cost(), note) {
+                        (Some(cost), _) => Some(Ok(cost)),
+                        (None, Some(why)) => Some(Err(why)),
+                        (None, None) => None,
+                    };
+                    run_checks_by(&runner, model, &[], None, None)
                 })
                 .map(|(_, results)| results);
-            GraphOutcome { path: path.clone(), result }
+            GraphOutcome { path: path.clone(), result, accelerated }
         })
         .collect()
+}
+
+/// The runner for the graph file `path` compiled into `model`: `flag` or
+/// else the graph's `simulation.accelerate`, with the note why a graph that
+/// asked to be accelerated is not; under `require`, that reason is an error.
+pub fn runner_for(flag: Option<Accelerate>, model: &Model, path: &Path) -> Result<(Runner, Option<String>), Failure> {
+    let mode = flag.unwrap_or(model.sim.accelerate);
+    if mode == Accelerate::Off {
+        return Ok((Runner::Interpreted, None));
+    }
+    let text = ctlgraph_core::files::read_text(path, ctlgraph_core::files::MAX_GRAPH_FILE)
+        .map_err(|e| Failure::Run(format!("cannot read {}: {e}", path.display())))?;
+    Runner::choose(mode, model, path, &text).map_err(|why| {
+        Diagnostic::in_file(&path.display().to_string(), format!("--accelerate=require: cannot accelerate: {why}"))
+            .into()
+    })
 }

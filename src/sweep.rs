@@ -7,8 +7,9 @@
 //! written in case order, numbers in shortest round-trip form, so the same
 //! command gives the same bytes whatever the number of jobs or shards.
 
+use crate::accel::Runner;
 use crate::record::Number;
-use crate::suite::{Failure, run_checks};
+use crate::suite::{Failure, run_checks_by};
 use ctlgraph_blocks::noise::Stream;
 use ctlgraph_core::checks::CheckResult;
 use ctlgraph_core::{Diagnostic, ParsedGraph};
@@ -191,11 +192,12 @@ impl Row {
     }
 }
 
-/// Runs `cases` of the graph `text` (named `file`) on `jobs` threads;
-/// returns the rows finished, in case order (all of them unless `stop` was
-/// raised, e.g. by Ctrl-C). `done` is called after each case.
+/// Runs `cases` of the graph `text` (named `file`) on `jobs` threads, by
+/// `runner`; returns the rows finished, in case order (all of them unless
+/// `stop` was raised, e.g. by Ctrl-C). `done` is called after each case.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
+    runner: &Runner,
     text: &str,
     file: &Path,
     names: &[String],
@@ -210,14 +212,15 @@ pub fn run(
     let parsed = ParsedGraph::parse(text, file.display().to_string().into())?;
     let registry = crate::registry();
     let base = crate::compile_flat(&parsed.flatten(&[])?, &registry)?;
-    let compile = |case: &Case| -> Result<ctlgraph_core::Model, Failure> {
+    let simulate = |case: &Case| {
         let sets: Vec<(String, String)> =
             names.iter().zip(&case.values).map(|(n, v)| (n.clone(), format!("{v:e}"))).collect();
         let mut flat = parsed.flatten(&sets)?;
         if let Some(seed) = case.seed {
             flat.sim.seed = seed;
         }
-        Ok(crate::recompile_flat(&base, &flat, &registry)?)
+        let model = crate::recompile_flat(&base, &flat, &registry)?;
+        run_checks_by(runner, model, &sets, case.seed, None)
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs.max(1))
@@ -231,7 +234,7 @@ pub fn run(
                     return None;
                 }
                 let start = std::time::Instant::now();
-                let outcome = compile(case).and_then(|model| run_checks(model, None));
+                let outcome = simulate(case);
                 let wall = start.elapsed().as_secs_f64();
                 let (result, trace) = match outcome {
                     Ok((trace, checks)) => {

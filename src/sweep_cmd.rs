@@ -48,6 +48,8 @@ pub(crate) struct SweepArgs {
     /// Where --plot-metric draws (default: metric.svg beside --out).
     #[arg(long, value_name = "FILE.svg")]
     metric_svg: Option<PathBuf>,
+    #[command(flatten)]
+    accelerate: crate::run_cmd::AccelerateArg,
 }
 
 /// Parses `A..B` (seeds) or `K/N` (shard) as a pair of whole numbers.
@@ -84,7 +86,13 @@ pub(crate) fn sweep(graph: &Path, a: SweepArgs) -> Result<(), Failure> {
         None => all,
     };
     let names: Vec<String> = spec.vary.iter().map(|v| v.name().to_string()).collect();
-    let checks: Vec<String> = ctlgraph::compile_file(graph, &[])?.checks.iter().map(|c| c.name.clone()).collect();
+    let model = ctlgraph::compile_file(graph, &[])?;
+    let checks: Vec<String> = model.checks.iter().map(|c| c.name.clone()).collect();
+    let (runner, note) = ctlgraph::suite::runner_for(a.accelerate.accelerate, &model, graph)?;
+    if let Some(why) = note {
+        eprintln!("note: running interpreted, not accelerated: {why}");
+    }
+
     let stop = std::sync::atomic::AtomicBool::new(false);
     let bar = CaseProgress::new(mine.len());
     let interrupted = crate::interrupt::flag();
@@ -103,7 +111,7 @@ pub(crate) fn sweep(graph: &Path, a: SweepArgs) -> Result<(), Failure> {
     let every = mine.len().div_ceil(50).max(1);
     let in_memory = |c: &sweep::Case| a.plot.is_some() && c.index.is_multiple_of(every);
     let keep = sweep::Keep { traces_dir: a.traces.as_deref(), in_memory: &in_memory };
-    let rows = sweep::run(&text, graph, &names, &mine, jobs, &keep, &stop, &done)?;
+    let rows = sweep::run(&runner, &text, graph, &names, &mine, jobs, &keep, &stop, &done)?;
     bar.finish();
     let table = sweep::table(&names, &checks, &rows, total, a.timing);
     write_atomic(&out, table.as_bytes()).map_err(io_error(&out))?;
@@ -118,6 +126,9 @@ pub(crate) fn sweep(graph: &Path, a: SweepArgs) -> Result<(), Failure> {
     }
     for line in sweep::summary(&checks, &rows) {
         println!("{line}");
+    }
+    if let Some(cost) = runner.cost() {
+        println!("accelerated ({cost})");
     }
     if rows.len() < mine.len() {
         return Err(Failure::Interrupted(format!(

@@ -7,13 +7,10 @@
 //! test` reuses it; a clean one (CI) builds ctlgraph's crates into it once
 //! (about a minute and a half on two cores) and each graph in about a second.
 
-use std::path::{Path, PathBuf};
+mod common;
+use common::{accelerate_cache as cache, text};
+use std::path::Path;
 use std::process::{Command, Output};
-
-/// The cache the tests share.
-fn cache() -> PathBuf {
-    Path::new(env!("CARGO_TARGET_TMPDIR")).join("accelerate-cache")
-}
 
 /// `ctlgraph ARGS` in the workspace with the given cache and PATH.
 fn ctlgraph(args: &[&str], cache: &Path, path: Option<&str>) -> Output {
@@ -23,10 +20,6 @@ fn ctlgraph(args: &[&str], cache: &Path, path: Option<&str>) -> Output {
         cmd.env("PATH", p);
     }
     cmd.output().unwrap()
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
 }
 
 /// Runs `graph` interpreted and accelerated (required) and returns both
@@ -106,4 +99,60 @@ fn a_graph_the_generated_step_does_not_cover_runs_interpreted_naming_the_block()
     assert_eq!(note.lines().count(), 1);
     let out = ctlgraph(&["run", graph, "--accelerate=require"], &cache(), None);
     assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn an_accelerated_sweep_tabulates_what_the_interpreted_one_does_with_one_build() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = "graphs/tutorial/pid_loop.yaml";
+    let table = |name: &str, accelerate: &str| {
+        let out = dir.path().join(name);
+        let args =
+            ["sweep", graph, "--vary", "kp=1..4:3", "--vary", "kd=0,0.1", "--out", out.to_str().unwrap(), accelerate];
+        let done = ctlgraph(&args, &cache(), None);
+        assert!(done.status.success(), "{}", text(&done.stderr));
+        (std::fs::read(out).unwrap(), text(&done.stdout))
+    };
+    let (interpreted, _) = table("i.csv", "--accelerate=off");
+    let (accelerated, summary) = table("a.csv", "--accelerate=require");
+    assert_eq!(interpreted, accelerated);
+    // One library for the six cases: one line for it.
+    assert_eq!(summary.matches("accelerated (step ").count(), 1, "{summary}");
+}
+
+#[test]
+fn the_graph_file_can_ask_for_acceleration_and_the_report_records_it() {
+    let dir = tempfile::tempdir().unwrap();
+    // The tutorial's first graph with `accelerate: require` added: its
+    // structure is the graph's, so its step is the one cached for it.
+    let source =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("graphs/tutorial/first_order.yaml"))
+            .unwrap();
+    let edited = source.replacen("simulation:\n", "simulation:\n  accelerate: require\n", 1);
+    assert_ne!(edited, source);
+    let graph = dir.path().join("first_order.yaml");
+    std::fs::write(&graph, edited).unwrap();
+    let report = dir.path().join("report.json");
+    let warm = ctlgraph(&["run", graph.to_str().unwrap()], &cache(), None);
+    assert!(warm.status.success(), "{}", text(&warm.stderr));
+    let out = ctlgraph(&["run", graph.to_str().unwrap(), "--report", report.to_str().unwrap()], &cache(), None);
+    assert!(text(&out.stdout).contains("accelerated (step loaded from the cache in "));
+    let json: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    assert_eq!(json["acceleration"]["step"], "loaded");
+    assert!(json["acceleration"]["seconds"].as_f64().unwrap() > 0.0);
+    // The flag overrides the file.
+    let out = ctlgraph(&["run", graph.to_str().unwrap(), "--accelerate=off"], &cache(), None);
+    assert!(!text(&out.stdout).contains("accelerated"));
+    // `ctlgraph test` says how each graph ran.
+    let out = ctlgraph(
+        &["test", "graphs/tutorial/pid_loop.yaml", "graphs/events/bouncing_ball.yaml", "--accelerate"],
+        &cache(),
+        None,
+    );
+    let listing = text(&out.stdout);
+    assert!(listing.contains("graphs/tutorial/pid_loop.yaml\n  accelerated (step "), "{listing}");
+    assert!(
+        listing.contains("graphs/events/bouncing_ball.yaml\n  note: running interpreted, not accelerated: "),
+        "{listing}"
+    );
 }

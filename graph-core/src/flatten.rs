@@ -37,6 +37,33 @@ pub struct SimConfig {
     pub default_max_step: bool,
     /// `output:` — the times recorded.
     pub output: OutputTimes,
+    /// `accelerate:` — whether runs use the generated step.
+    pub accelerate: Accelerate,
+}
+
+/// `simulation: { accelerate: … }` and `--accelerate`: whether a run uses
+/// the graph's generated step, built into a library (ctlgraph's `accel`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Accelerate {
+    /// Interpreted (`false`, `off`; the default).
+    #[default]
+    Off,
+    /// Accelerated when it can be, else interpreted with a note why (`true`, `on`).
+    On,
+    /// Accelerated, or an error (`require`).
+    Require,
+}
+
+impl Accelerate {
+    /// `on`/`true`, `require`, `off`/`false`.
+    pub fn parse(value: &str) -> Result<Accelerate, String> {
+        match value {
+            "on" | "true" => Ok(Accelerate::On),
+            "require" => Ok(Accelerate::Require),
+            "off" | "false" => Ok(Accelerate::Off),
+            other => Err(format!("`{other}`: expected on, require or off")),
+        }
+    }
 }
 
 /// `solver: { zero_crossing: … }`: whether the simulator locates the zero
@@ -230,7 +257,7 @@ fn eval_parameters(
     Ok(scope)
 }
 
-const SIM_KEYS: [&str; 4] = ["stop", "solver", "seed", "output"];
+const SIM_KEYS: [&str; 5] = ["stop", "solver", "seed", "output", "accelerate"];
 const SOLVER_KEYS: [&str; 8] =
     ["method", "step", "rtol", "atol", "max_step", "initial_step", "zero_crossing", "exact_lti"];
 const METHODS: [&str; 5] = ["dopri5", "trbdf2", "rk4", "heun", "euler"];
@@ -388,7 +415,24 @@ fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, 
     let default_max_step = method.max_step().is_nan();
     let method = if default_max_step { method.with_max_step(method.default_max_step(stop)) } else { method };
     let output = output::output_times(yaml::lookup(entries, "output"), num, stop)?;
-    Ok(SimConfig { stop, method, seed, zero_crossing, exact_lti, default_max_step, output })
+    let accelerate = match yaml::lookup(entries, "accelerate") {
+        None => Accelerate::Off,
+        Some(v) => match &v.kind {
+            Kind::Bool(true) => Accelerate::On,
+            Kind::Bool(false) => Accelerate::Off,
+            Kind::Str(s) if s == "require" => Accelerate::Require,
+            _ => {
+                return Err(Diagnostic::at(
+                    &v.pos,
+                    format!("`accelerate` must be true, false or require, found {}", v.describe()),
+                )
+                .with_hint(
+                    "true runs the generated step when it can (else interpreted, with a note); require insists",
+                ));
+            }
+        },
+    };
+    Ok(SimConfig { stop, method, seed, zero_crossing, exact_lti, default_max_step, output, accelerate })
 }
 
 fn check_keys(entries: &[(Key, Yaml)], known: &[&str], section: &str) -> Result<(), Diagnostic> {

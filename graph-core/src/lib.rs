@@ -27,7 +27,7 @@ pub use block::Crossing;
 pub use block::{Block, Breakpoint, Interface, Io, Kernel, SampleTime, TimeOnly, Width};
 pub use compile::{Model, compile, recompile, reuse_structure};
 pub use diag::{Diagnostic, Pos};
-pub use flatten::{FlatGraph, OutputTimes, ParsedGraph, SimConfig, ZeroCrossing, load, load_str};
+pub use flatten::{Accelerate, FlatGraph, OutputTimes, ParsedGraph, SimConfig, ZeroCrossing, load, load_str};
 pub use params::Params;
 pub use registry::{BlockType, Built, ParamDefault, ParamDoc, ParamKind, PortDoc, Registry};
 pub use sim::{RunState, RunStats, SimError, Simulator, Snapshot};

@@ -15,12 +15,26 @@ pub fn simulate(model: Model, stop: Option<f64>) -> Result<Trace, SimError> {
 /// [`simulate`], with the run's step, solver and event counts.
 pub fn simulate_with_stats(model: Model, stop: Option<f64>) -> Result<(Trace, RunStats), SimError> {
     let mut sim = Simulator::new(model, stop);
-    let mut recorder = Recorder::new(sim.model());
-    let mut trace = Trace::new(sim.model().headers());
-    trace.loop_figures = sim.model().loop_figures.clone();
-    let stats = sim.run(&mut |t, signals| recorder.sample(t, signals, &mut |row| trace.push(row)))?;
+    let trace = record(sim.shared_model().as_ref(), |sink| sim.run_while(sink))?;
+    Ok((trace, sim.stats()))
+}
+
+/// The trace of a run of `model` made by `run`, which hands its sink the
+/// signals at every major step (as [`Simulator::run_while`]): the
+/// recording of [`simulate`] for any back-end.
+pub fn record(
+    model: &Model,
+    run: impl FnOnce(&mut dyn FnMut(f64, &[f64]) -> bool) -> Result<bool, SimError>,
+) -> Result<Trace, SimError> {
+    let mut recorder = Recorder::new(model);
+    let mut trace = Trace::new(model.headers());
+    trace.loop_figures = model.loop_figures.clone();
+    run(&mut |t, signals| {
+        recorder.sample(t, signals, &mut |row| trace.push(row));
+        true
+    })?;
     recorder.flush(&mut |row| trace.push(row));
-    Ok((trace, stats))
+    Ok(trace)
 }
 
 /// Turns signal buffers into rows `[t, col1, col2, …]`, every `every`-th

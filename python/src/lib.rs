@@ -2,8 +2,9 @@
 //! drives compiled graphs step by step, at Rust speed, with numpy arrays
 //! back. The package `ctlgraph` (ctlgraph/__init__.py) re-exports it.
 
+use ctlgraph::accel::{Accelerate, Runner};
 use ctlgraph::core::checks::CheckResult;
-use ctlgraph::core::trace::{Trace, simulate_with_stats};
+use ctlgraph::core::trace::Trace;
 use ctlgraph::core::{Diagnostic, Model, Simulator, Snapshot as CoreSnapshot};
 use numpy::{PyArray1, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::create_exception;
@@ -175,11 +176,45 @@ impl RunResult {
     }
 }
 
-/// Runs `model` to its stop time (or `stop`), recording as the CLI does.
-fn simulate(model: Model, stop: Option<f64>) -> std::result::Result<(Trace, Vec<CheckResult>, [u64; 5], f64), String> {
+/// `accelerate=True | False | "require"` (None: the graph's own setting).
+fn accelerate_arg(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Accelerate>> {
+    let Some(value) = value.filter(|v| !v.is_none()) else { return Ok(None) };
+    if let Ok(b) = value.extract::<bool>() {
+        return Ok(Some(if b { Accelerate::On } else { Accelerate::Off }));
+    }
+    match value.extract::<String>() {
+        Ok(s) if s == "require" => Ok(Some(Accelerate::Require)),
+        _ => Err(PyValueError::new_err("accelerate: True, False or \"require\"")),
+    }
+}
+
+/// The runner `accelerate` asks for the graph `path` compiled into `model`;
+/// a graph that runs interpreted instead says why in a RuntimeWarning.
+fn runner(py: Python<'_>, accelerate: Option<Accelerate>, model: &Model, path: &std::path::Path) -> PyResult<Runner> {
+    let (runner, note) = py.detach(|| ctlgraph::suite::runner_for(accelerate, model, path)).map_err(|e| match e {
+        ctlgraph::suite::Failure::Invalid(d) => graph_error(py, &d),
+        other => SimulationError::new_err(other.to_string()),
+    })?;
+    if let Some(why) = note {
+        let message = std::ffi::CString::new(format!("running interpreted, not accelerated: {why}"))
+            .unwrap_or_else(|_| c"running interpreted, not accelerated".to_owned());
+        PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyRuntimeWarning>(), &message, 1)?;
+    }
+    Ok(runner)
+}
+
+/// Runs `model` (compiled from its graph with `sets` and `seed`) to its
+/// stop time (or `stop`) by `runner`, recording as the CLI does.
+fn simulate(
+    runner: &Runner,
+    model: Model,
+    sets: &[(String, String)],
+    seed: Option<u64>,
+    stop: Option<f64>,
+) -> std::result::Result<(Trace, Vec<CheckResult>, [u64; 5], f64), String> {
     let start = std::time::Instant::now();
     let checks = model.checks.clone();
-    let (trace, s) = simulate_with_stats(model, stop).map_err(|e| e.to_string())?;
+    let (trace, s) = runner.simulate(model, sets, seed, stop).map_err(|e| e.to_string())?;
     let results = checks.iter().map(|c| trace.check(c)).collect();
     let counts = [s.major_steps, s.solver.steps, s.solver.rejected, s.solver.evaluations, s.events];
     Ok((trace, results, counts, start.elapsed().as_secs_f64()))
@@ -192,22 +227,28 @@ fn simulate(model: Model, stop: Option<f64>) -> std::result::Result<(Trace, Vec<
 ///
 /// `set` overrides graph parameters (numbers, or expressions over the
 /// graph's parameters as strings), `stop` the stop time [s], `seed` the
-/// noise seed. The numbers are the CLI's (`ctlgraph run … --out`), bit for
-/// bit. The GIL is released while the graph runs, so threads can run
-/// graphs in parallel. Raises GraphError for an invalid file and
+/// noise seed, `accelerate` (True, False or "require"; default: the
+/// graph's `simulation.accelerate`) runs the generated step as
+/// `--accelerate` does. The numbers are the CLI's (`ctlgraph run … --out`),
+/// bit for bit. The GIL is released while the graph runs, so threads can
+/// run graphs in parallel. Raises GraphError for an invalid file and
 /// SimulationError when the run stops early.
 #[pyfunction]
-#[pyo3(signature = (path, set = None, stop = None, seed = None))]
+#[pyo3(signature = (path, set = None, stop = None, seed = None, accelerate = None))]
 fn run(
     py: Python<'_>,
     path: PathBuf,
     set: Option<&Bound<'_, PyDict>>,
     stop: Option<f64>,
     seed: Option<u64>,
+    accelerate: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<RunResult> {
     let sets = overrides(set)?;
+    let accelerate = accelerate_arg(accelerate)?;
     let model = py.detach(|| GRAPHS.compile(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
-    let (trace, checks, counts, wall) = py.detach(|| simulate(model, stop)).map_err(SimulationError::new_err)?;
+    let runner = runner(py, accelerate, &model, &path)?;
+    let (trace, checks, counts, wall) =
+        py.detach(|| simulate(&runner, model, &sets, seed, stop)).map_err(SimulationError::new_err)?;
     let Trace { headers, columns, .. } = trace;
     let columns = columns.into_iter().map(|c| PyArray1::from_vec(py, c).unbind()).collect();
     let checks = checks.iter().map(|c| Py::new(py, Check::from(c))).collect::<PyResult<_>>()?;
@@ -216,6 +257,11 @@ fn run(
         stats.set_item(name, v)?;
     }
     stats.set_item("wall_seconds", wall)?;
+    match runner.cost() {
+        Some(ctlgraph::accel::Cost::Built(s)) => stats.set_item("build_seconds", s)?,
+        Some(ctlgraph::accel::Cost::Loaded(s)) => stats.set_item("load_seconds", s)?,
+        None => {}
+    }
     Ok(RunResult { names: headers, columns, checks, stats: stats.unbind() })
 }
 
@@ -469,9 +515,11 @@ fn linearize(
 /// `vary` maps a parameter to a list of values, `"LO..HI:N"` (a grid) or
 /// `"LO..HI"` (with `random=N` draws); `seeds=(A, B)` runs every case
 /// with each seed A..B; `seed` seeds the draws; `jobs` threads (default:
-/// all cores; the GIL is released). Raises GraphError.
+/// all cores; the GIL is released); `accelerate` as in `run` (one step
+/// library serves every case). Raises GraphError.
 #[pyfunction]
-#[pyo3(signature = (path, vary, random = None, seeds = None, seed = 0, jobs = None))]
+#[pyo3(signature = (path, vary, random = None, seeds = None, seed = 0, jobs = None, accelerate = None))]
+#[allow(clippy::too_many_arguments)]
 fn sweep(
     py: Python<'_>,
     path: PathBuf,
@@ -480,7 +528,9 @@ fn sweep(
     seeds: Option<(u64, u64)>,
     seed: u64,
     jobs: Option<usize>,
+    accelerate: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyDict>> {
+    let accelerate = accelerate_arg(accelerate)?;
     use ctlgraph::sweep::{Keep, SweepSpec, Vary};
     let mut varied = Vec::new();
     for (k, v) in vary.iter() {
@@ -504,12 +554,13 @@ fn sweep(
     let jobs = jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let keep = Keep { traces_dir: None, in_memory: &|_| false };
     let stop = std::sync::atomic::AtomicBool::new(false);
-    let rows =
-        py.detach(|| ctlgraph::sweep::run(&text, &path, &names, &cases, jobs, &keep, &stop, &|| {})).map_err(|e| {
-            match e {
-                ctlgraph::suite::Failure::Invalid(d) => graph_error(py, &d),
-                other => SimulationError::new_err(other.to_string()),
-            }
+    let model = py.detach(|| ctlgraph::compile_file(&path, &[])).map_err(|d| graph_error(py, &d))?;
+    let runner = runner(py, accelerate, &model, &path)?;
+    let rows = py
+        .detach(|| ctlgraph::sweep::run(&runner, &text, &path, &names, &cases, jobs, &keep, &stop, &|| {}))
+        .map_err(|e| match e {
+            ctlgraph::suite::Failure::Invalid(d) => graph_error(py, &d),
+            other => SimulationError::new_err(other.to_string()),
         })?;
     let table = PyDict::new(py);
     table.set_item("case", PyArray1::from_vec(py, rows.iter().map(|r| r.case.index as u64).collect()))?;

@@ -206,3 +206,32 @@ def test_sweep_is_the_clis(tmp_path):
     assert table["status"] == [r["status"] for r in rows]
     assert np.array_equal(table["steady"], [float(r["steady"]) for r in rows])
     assert table["steady passed"] == [r["steady passed"] == "true" for r in rows]
+
+
+def test_accelerated_runs_and_sweeps_equal_the_interpreted(monkeypatch):
+    # The cache the Rust tests fill (tests/accelerate.rs), so the step is
+    # built once per checkout.
+    monkeypatch.setenv("CTLGRAPH_CACHE_DIR", str(ROOT / "target" / "tmp" / "accelerate-cache"))
+    name = graph("tutorial/pid_loop.yaml")
+    plain = ctlgraph.run(name, set={"kp": 2.5})
+    fast = ctlgraph.run(name, set={"kp": 2.5}, accelerate="require")
+    assert "build_seconds" in fast.stats or "load_seconds" in fast.stats
+    assert "load_seconds" not in plain.stats and "build_seconds" not in plain.stats
+    for column in plain.names:
+        assert np.array_equal(plain[column], fast[column]), column
+    vary = {"kp": "1..4:3"}
+    assert np.array_equal(
+        ctlgraph.sweep(name, vary=vary)["steady"], ctlgraph.sweep(name, vary=vary, accelerate=True)["steady"]
+    )
+
+
+def test_without_a_toolchain_an_accelerated_run_warns_and_interprets(monkeypatch, tmp_path):
+    monkeypatch.setenv("CTLGRAPH_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("PATH", "/nonexistent")
+    with pytest.warns(RuntimeWarning, match="running interpreted, not accelerated: no Rust toolchain"):
+        result = ctlgraph.run(graph("tutorial/first_order.yaml"), accelerate=True)
+    assert len(result.t) > 100
+    with pytest.raises(ctlgraph.GraphError, match="--accelerate=require: cannot accelerate"):
+        ctlgraph.run(graph("tutorial/first_order.yaml"), accelerate="require")
+    with pytest.raises(ValueError, match="accelerate"):
+        ctlgraph.run(graph("tutorial/first_order.yaml"), accelerate="fast")

@@ -15,34 +15,13 @@ mod library;
 mod source;
 mod toolchain;
 
+pub use ctlgraph_core::Accelerate;
+use ctlgraph_core::trace::{Trace, record};
+use ctlgraph_core::{Model, RunStats, SimError};
 pub use library::{AcceleratedRun, Library};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
-
-/// Whether a run is accelerated.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Mode {
-    /// Interpreted.
-    #[default]
-    Off,
-    /// Accelerated when it can be, else interpreted with a note why.
-    On,
-    /// Accelerated, or an error.
-    Require,
-}
-
-impl Mode {
-    /// `--accelerate=VALUE`: `on` (the bare flag), `require`, `off`.
-    pub fn parse(value: &str) -> Result<Mode, String> {
-        match value {
-            "on" | "true" => Ok(Mode::On),
-            "require" => Ok(Mode::Require),
-            "off" | "false" => Ok(Mode::Off),
-            other => Err(format!("`{other}`: expected on, require or off")),
-        }
-    }
-}
 
 /// What making a library ready cost: a build (cold cache) or only a load.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -64,11 +43,11 @@ impl std::fmt::Display for Cost {
 
 /// The step library for `model`'s structure, from the cache or built now;
 /// `Err` says in one sentence why there is none.
-pub fn library(model: &ctlgraph_core::Model) -> Result<(Arc<Library>, Cost), String> {
+pub fn library(model: &Model) -> Result<(Arc<Library>, Cost), String> {
     let start = Instant::now();
-    let code = ctlgraph_core::codegen::generate(model)
+    let module = ctlgraph_core::codegen::module(model)
         .map_err(|why| format!("the generated step does not cover this graph: {}", why.join("; ")))?;
-    let fingerprint = ctlgraph_core::codegen::fingerprint(model).unwrap_or_default();
+    let (code, fingerprint) = (module.code, module.fingerprint);
     let dir = toolchain::cache_dir()?;
     let key = toolchain::key(&code);
     let path = toolchain::library_path(&dir, &key);
@@ -81,23 +60,85 @@ pub fn library(model: &ctlgraph_core::Model) -> Result<(Arc<Library>, Cost), Str
     Ok((lib, Cost::Built(start.elapsed().as_secs_f64())))
 }
 
-/// An accelerated run of the graph file `graph` as the program compiled it
-/// into `model` (with `sets`, `seed` and `stop`), and what preparing it cost.
-pub fn run(
-    model: &ctlgraph_core::Model,
-    graph: &Path,
-    sets: &[(String, String)],
-    seed: Option<u64>,
-    stop: Option<f64>,
-) -> Result<(AcceleratedRun, Cost), String> {
-    let (lib, cost) = library(model)?;
-    let text = ctlgraph_core::files::read_text(graph, ctlgraph_core::files::MAX_GRAPH_FILE)
-        .map_err(|e| format!("cannot read {}: {e}", graph.display()))?;
-    let start = Instant::now();
-    let run = lib.create(&text, &graph.display().to_string(), sets, seed, stop)?;
-    let cost = match cost {
-        Cost::Built(s) => Cost::Built(s + start.elapsed().as_secs_f64()),
-        Cost::Loaded(s) => Cost::Loaded(s + start.elapsed().as_secs_f64()),
-    };
-    Ok((run, cost))
+/// How the runs of one graph are made: by its step library, or
+/// interpreted.
+pub enum Runner {
+    Interpreted,
+    Accelerated {
+        lib: Arc<Library>,
+        /// The graph's text and file name, which the library compiles.
+        text: Arc<str>,
+        file: String,
+        cost: Cost,
+    },
+}
+
+impl Runner {
+    /// The runner `mode` asks for the graph `text` read from `file`,
+    /// compiled (with its overrides' values) into `model`. Under [`Accelerate::On`] a graph
+    /// that cannot be accelerated is interpreted and the second value says
+    /// why; under [`Accelerate::Require`] that reason is the error.
+    pub fn choose(
+        mode: Accelerate,
+        model: &Model,
+        file: &Path,
+        text: &str,
+    ) -> Result<(Runner, Option<String>), String> {
+        if mode == Accelerate::Off {
+            return Ok((Runner::Interpreted, None));
+        }
+        let prepared = library(model).map(|(lib, cost)| Runner::Accelerated {
+            lib,
+            text: text.into(),
+            file: file.display().to_string(),
+            cost,
+        });
+        match (prepared, mode) {
+            (Ok(runner), _) => Ok((runner, None)),
+            (Err(why), Accelerate::Require) => Err(why),
+            (Err(why), _) => Ok((Runner::Interpreted, Some(why))),
+        }
+    }
+
+    /// What preparing the library cost, when runs are accelerated.
+    pub fn cost(&self) -> Option<Cost> {
+        match self {
+            Runner::Interpreted => None,
+            Runner::Accelerated { cost, .. } => Some(*cost),
+        }
+    }
+
+    /// A run in the library of the graph compiled with `sets` and `seed`,
+    /// to `stop`; `None` when runs are interpreted. `Err` when the library
+    /// cannot run it (overrides that change the graph's structure).
+    pub fn start(
+        &self,
+        sets: &[(String, String)],
+        seed: Option<u64>,
+        stop: Option<f64>,
+    ) -> Result<Option<AcceleratedRun>, String> {
+        match self {
+            Runner::Interpreted => Ok(None),
+            Runner::Accelerated { lib, text, file, .. } => lib.create(text, file, sets, seed, stop).map(Some),
+        }
+    }
+
+    /// [`ctlgraph_core::trace::simulate_with_stats`] of `model`, compiled
+    /// from this graph with `sets` and `seed`: in the library when it can
+    /// run it, else (the overrides changed the structure) interpreted.
+    pub fn simulate(
+        &self,
+        model: Model,
+        sets: &[(String, String)],
+        seed: Option<u64>,
+        stop: Option<f64>,
+    ) -> Result<(Trace, RunStats), SimError> {
+        match self.start(sets, seed, stop) {
+            Ok(Some(mut run)) => {
+                let trace = record(&model, |sink| run.run_while(sink))?;
+                Ok((trace, run.stats()))
+            }
+            _ => ctlgraph_core::trace::simulate_with_stats(model, stop),
+        }
+    }
 }

@@ -5,9 +5,20 @@ use ctlgraph::record::Trace;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// Runs the `ctlgraph` binary (as CI would: no progress bar).
+/// Runs the `ctlgraph` binary (as CI would: no progress bar), with the
+/// accelerated steps cached where `tests/accelerate.rs` caches them.
 pub fn ctlgraph(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ctlgraph")).args(args).env("CI", "1").output().expect("runs")
+    Command::new(env!("CARGO_BIN_EXE_ctlgraph"))
+        .args(args)
+        .env("CI", "1")
+        .env("CTLGRAPH_CACHE_DIR", accelerate_cache())
+        .output()
+        .expect("runs")
+}
+
+/// The cache of accelerated steps the tests share (kept between test runs).
+pub fn accelerate_cache() -> PathBuf {
+    Path::new(env!("CARGO_TARGET_TMPDIR")).join("accelerate-cache")
 }
 
 pub fn text(bytes: &[u8]) -> String {
