@@ -178,8 +178,8 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
     let wall = start.elapsed().as_secs_f64();
     let cost = engine.acceleration.as_ref().and_then(|a| a.as_ref().ok().copied());
     let reached = match &engine.accelerated {
-        Some(run) => Reached { time: run.time(), stats: run.stats(), cost },
-        None => Reached { time: sim.time(), stats: sim.stats(), cost },
+        Some(run) => Reached { time: run.time(), stats: run.stats(), warnings: run.warnings(), cost },
+        None => Reached { time: sim.time(), stats: sim.stats(), warnings: sim.warnings().to_vec(), cost },
     };
     // A run that reached its stop time has no cut, even if one was asked
     // for at its last step.
@@ -216,7 +216,7 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
             wall_seconds: wall,
             status,
             error: error.clone(),
-            warnings: sim.warnings(),
+            warnings: &reached.warnings,
             checks: &results,
             columns: &sim.model().columns,
             blocks: &sim.model().meta,
@@ -278,6 +278,7 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
 struct Reached {
     time: f64,
     stats: RunStats,
+    warnings: Vec<String>,
     cost: Option<Cost>,
 }
 
@@ -345,7 +346,7 @@ fn summary(
         graph.display(),
         plural(stats.major_steps, "step"),
     );
-    for w in sim.model().warnings.iter().chain(sim.warnings()) {
+    for w in sim.model().warnings.iter().chain(&reached.warnings) {
         report.push_str(&format!("  warning: {w}\n"));
     }
     for r in results {

@@ -38,12 +38,15 @@ fn both_ways(graph: &str, dir: &Path) -> (Vec<u8>, Vec<u8>, String) {
 fn accelerated_runs_write_the_interpreters_csv_byte_for_byte() {
     let dir = tempfile::tempdir().unwrap();
     // Fixed-step with sample clocks and noise; adaptive; stiff (TR-BDF2);
-    // a transport delay under an adaptive method (history, breakpoints).
+    // a transport delay under an adaptive method (history, breakpoints);
+    // located events (impacts, a relay's switching).
     for graph in [
         "graphs/fladrc/ladrc.yaml",
         "graphs/tutorial/pid_loop.yaml",
         "graphs/stiff/van_der_pol.yaml",
         "graphs/events/dead_time_pi.yaml",
+        "graphs/events/bouncing_ball.yaml",
+        "graphs/events/thermostat.yaml",
     ] {
         let (interpreted, accelerated, summary) = both_ways(graph, dir.path());
         assert!(interpreted.len() > 1000, "{graph}: a CSV of {} bytes", interpreted.len());
@@ -89,13 +92,14 @@ fn without_a_toolchain_the_run_is_interpreted_and_says_why_in_one_line() {
 }
 
 #[test]
-fn a_graph_the_generated_step_does_not_cover_runs_interpreted_naming_the_block() {
-    let graph = "graphs/events/bouncing_ball.yaml";
+fn a_graph_the_generated_step_does_not_cover_runs_interpreted_saying_why() {
+    // Rows between steps, from the solver's dense output.
+    let graph = "graphs/events/antiwindup_dead_time.yaml";
     let out = ctlgraph(&["run", graph, "--accelerate"], &cache(), None);
     assert!(out.status.success());
     let note = text(&out.stderr);
     assert!(note.starts_with("note: running interpreted, not accelerated: the generated step does not cover"));
-    assert!(note.contains("block `vel` (integrator) has zero crossings"), "{note}");
+    assert!(note.contains("`simulation.output` records rows between steps"), "{note}");
     assert_eq!(note.lines().count(), 1);
     let out = ctlgraph(&["run", graph, "--accelerate=require"], &cache(), None);
     assert_eq!(out.status.code(), Some(2));
@@ -145,14 +149,14 @@ fn the_graph_file_can_ask_for_acceleration_and_the_report_records_it() {
     assert!(!text(&out.stdout).contains("accelerated"));
     // `ctlgraph test` says how each graph ran.
     let out = ctlgraph(
-        &["test", "graphs/tutorial/pid_loop.yaml", "graphs/events/bouncing_ball.yaml", "--accelerate"],
+        &["test", "graphs/tutorial/pid_loop.yaml", "graphs/events/antiwindup_dead_time.yaml", "--accelerate"],
         &cache(),
         None,
     );
     let listing = text(&out.stdout);
     assert!(listing.contains("graphs/tutorial/pid_loop.yaml\n  accelerated (step "), "{listing}");
     assert!(
-        listing.contains("graphs/events/bouncing_ball.yaml\n  note: running interpreted, not accelerated: "),
+        listing.contains("graphs/events/antiwindup_dead_time.yaml\n  note: running interpreted, not accelerated: "),
         "{listing}"
     );
 }

@@ -100,25 +100,63 @@ fn a_generated_step_whose_signal_overflows_stops_as_the_interpreter_does_and_sta
 }
 
 #[test]
-fn the_papers_loops_and_adaptive_runs_are_generated_and_events_refused_with_a_reason() {
+fn the_papers_loops_adaptive_runs_and_events_are_generated_and_inports_refused_with_a_reason() {
     let generated: Vec<&str> = GENERATED.iter().map(|(p, _)| *p).collect();
-    // The papers' fixed-step loops, and adaptive runs: dopri5 (with a
-    // transport delay's breakpoints in dead_time_pi) and the stiff TR-BDF2,
-    // which the one driver integrates for a generated step as for the
-    // interpreter.
+    // The papers' loops, with the contact and cutting forces' crossings;
+    // adaptive runs: dopri5 (with a transport delay's breakpoints in
+    // dead_time_pi) and the stiff TR-BDF2; located events (an impact, a
+    // relay), which the one driver and the one watch handle for a
+    // generated step as for the interpreter.
     for path in [
         "graphs/fladrc/ladrc.yaml",
         "graphs/fladrc/fladrc.yaml",
+        "graphs/milling/hinf.yaml",
+        "graphs/contact-force/impedance_pid.yaml",
         "benches/pid_loop_rk4.yaml",
         "graphs/tutorial/pid_loop.yaml",
         "graphs/events/dead_time_pi.yaml",
+        "graphs/events/bouncing_ball.yaml",
+        "graphs/events/thermostat.yaml",
         "graphs/stiff/van_der_pol.yaml",
         "graphs/stiff/robertson.yaml",
     ] {
         assert!(generated.contains(&path), "{path} has no generated step; refused: {REFUSED:?}");
     }
-    let (_, why) = REFUSED.iter().find(|(p, _)| *p == "graphs/events/bouncing_ball.yaml").expect("events are refused");
-    assert!(why.contains("zero crossings"), "{why}");
+    let (_, why) =
+        REFUSED.iter().find(|(p, _)| *p == "graphs/tutorial/controller_io.yaml").expect("inports are refused");
+    assert!(why.contains("top-level inport"), "{why}");
+}
+
+/// Past the bouncing ball's Zeno point: the chattering error, or with
+/// `zero_crossing: adaptive` the warning and the run on, with the same
+/// steps, events and words from both back-ends.
+#[test]
+fn a_generated_step_chatters_and_ignores_chattering_as_the_interpreter_does() {
+    use ctlgraph_compiled_graphs::graphs_events_bouncing_ball::Step;
+    const PATH: &str = "graphs/events/bouncing_ball.yaml";
+    let text = std::fs::read_to_string(PATH).unwrap();
+    for adaptive in [false, true] {
+        let text = if adaptive {
+            text.replace("max_step: 0.05 }", "max_step: 0.05, zero_crossing: adaptive }")
+        } else {
+            text.clone()
+        };
+        let model = || ctlgraph::compile_str(&text, PATH, &[]).unwrap();
+        let (mut sim, mut run) =
+            (Simulator::new(model(), Some(14.0)), Compiled::<Step>::new(&model(), Some(14.0)).unwrap());
+        let (mut expected, mut got) = (Vec::new(), Vec::new());
+        let interpreted = sim.run(&mut |t, s| expected.push((t, s.to_vec()))).map_err(|e| e.to_string());
+        let generated = run.run(|t, s| got.push((t, s.to_vec()))).map_err(|e| e.to_string());
+        assert_same(&format!("{PATH} adaptive: {adaptive}"), &got, &expected);
+        assert_eq!(generated, interpreted);
+        assert_eq!(run.warnings(), sim.warnings());
+        assert_eq!(run.stats().events, sim.stats().events);
+        assert!(sim.stats().events > 40, "{:?}", sim.stats());
+        match adaptive {
+            false => assert!(interpreted.unwrap_err().contains("block `impact` chatters")),
+            true => assert!(interpreted.is_ok() && sim.warnings()[0].contains("block `impact` chattered")),
+        }
+    }
 }
 
 #[test]
@@ -139,12 +177,12 @@ fn codegen_writes_the_module_or_says_why_it_cannot() {
     let code = std::fs::read_to_string(&file).unwrap();
     assert_eq!(code, ctlgraph_core::codegen::generate(&model).unwrap());
     assert!(code.contains("pub struct Step") && code.contains("::ctlgraph_blocks::adrc::Leso"), "{code}");
-    // Zero crossings: exit 1, the reason, and no file.
-    let refused = dir.path().join("ball.rs");
-    let out = ctlgraph(&["codegen", "graphs/events/bouncing_ball.yaml", "--out", path(&refused)]);
+    // Top-level inports: exit 1, the reason, and no file.
+    let refused = dir.path().join("io.rs");
+    let out = ctlgraph(&["codegen", "graphs/tutorial/controller_io.yaml", "--out", path(&refused)]);
     assert_eq!(out.status.code(), Some(1));
     let stderr = text(&out.stderr);
-    assert!(stderr.contains("cannot generate a step") && stderr.contains("zero crossings"), "{stderr}");
+    assert!(stderr.contains("cannot generate a step") && stderr.contains("top-level inport"), "{stderr}");
     assert!(!refused.exists());
     // The graph file itself is never the output.
     let out = ctlgraph(&["codegen", "graphs/fladrc/ladrc.yaml", "--out", "graphs/fladrc/ladrc.yaml"]);

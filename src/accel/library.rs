@@ -103,6 +103,20 @@ impl AcceleratedRun {
         unsafe { (self.lib.api.stats)(self.run) }.into()
     }
 
+    /// [`ctlgraph_core::Simulator::warnings`], from the library.
+    pub fn warnings(&self) -> Vec<String> {
+        unsafe extern "C" fn push(ctx: *mut c_void, text: *const u8, len: usize) {
+            // SAFETY: `ctx` is the `Vec` below; `text` holds `len` bytes.
+            let (list, bytes) = unsafe { (&mut *ctx.cast::<Vec<String>>(), std::slice::from_raw_parts(text, len)) };
+            list.push(String::from_utf8_lossy(bytes).into_owned());
+        }
+        let mut list: Vec<String> = Vec::new();
+        let sink = TextSink { ctx: (&raw mut list).cast(), write: push };
+        // SAFETY: `run` is live; `sink` outlives the call.
+        unsafe { (self.lib.api.warnings)(self.run, &sink) };
+        list
+    }
+
     /// [`ctlgraph_core::Simulator::run_while`], in the library. A panic in
     /// `sink` is carried over the library and resumed here.
     pub fn run_while(&mut self, sink: &mut dyn FnMut(f64, &[f64]) -> bool) -> Result<bool, SimError> {

@@ -3,8 +3,9 @@
 //! solver) around the generated sweeps, so both back-ends compute the same
 //! numbers to the bit.
 
-use crate::block::{Breakpoint, Kernel, Port};
+use crate::block::{Breakpoint, Crossing, Kernel, Port};
 use crate::compile::{BlockMeta, Model};
+use crate::sim::events::{Crossings, Watch};
 use crate::sim::{self, Blame, Clockwork, RunStats, SimError, Sweeps, driver};
 use ctlgraph_solver::{OdeSystem, Zoh, ZohSingleInput};
 
@@ -33,6 +34,20 @@ pub trait GeneratedStep: Sized {
     fn step_held(&mut self, dt: f64, x: &mut [f64]);
     /// A solver stage: continuous outputs at (t, x), then derivatives.
     fn derivatives(&mut self, t: f64, left: bool, x: &[f64], dx: &mut [f64]);
+    /// A stage's continuous outputs alone (for locating a crossing).
+    fn minor_outputs(&mut self, t: f64, left: bool, x: &[f64]);
+    /// Watched block `b`'s zero-crossing functions at (t, x), outputs
+    /// computed: at a major step (`major`), or in a stage (modes frozen
+    /// as [`GeneratedStep::freeze`] set them). The watched blocks are
+    /// `sim::events::watched`'s, in its order.
+    fn zero_crossings(&mut self, b: usize, t: f64, left: bool, x: &[f64], major: bool, g: &mut [f64]);
+    fn crossing_direction(&self, b: usize, k: usize) -> Crossing;
+    fn crossing_located(&mut self, b: usize, k: usize);
+    /// Whether watched block `b`'s modes freeze in minor steps.
+    fn freeze(&mut self, b: usize, frozen: bool);
+    /// The watched blocks' major-step work (mode switches, state resets);
+    /// whether any changed something.
+    fn major_step_events(&mut self, t: f64, x: &mut [f64]) -> bool;
     fn clamp_states(&mut self, x: &mut [f64]) -> bool;
     /// The earliest block event after `t` and its generation, as
     /// [`crate::sim::earlier`] folds the blocks' events.
@@ -103,6 +118,8 @@ pub struct Compiled<G: GeneratedStep> {
     step: G,
     x: Vec<f64>,
     clockwork: Clockwork,
+    /// The zero-crossing watch (`sim/events.rs`), as the interpreter's.
+    watch: Watch,
     /// Whether every signal was finite after the last output sweep.
     all_finite: bool,
     /// For naming a block in an error.
@@ -120,6 +137,20 @@ struct Stage<'a, G> {
 impl<G: GeneratedStep> OdeSystem for Stage<'_, G> {
     fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
         self.step.derivatives(t, t >= self.t_end, x, dx);
+    }
+}
+
+impl<G: GeneratedStep> Crossings for Stage<'_, G> {
+    fn outputs(&mut self, t: f64, x: &[f64]) {
+        self.step.minor_outputs(t, t >= self.t_end, x);
+    }
+
+    fn zero_crossings(&mut self, b: usize, _i: usize, t: f64, x: &[f64], g: &mut [f64]) {
+        self.step.zero_crossings(b, t, t >= self.t_end, x, false, g);
+    }
+
+    fn direction(&self, b: usize, _i: usize, k: usize) -> Crossing {
+        self.step.crossing_direction(b, k)
     }
 }
 
@@ -142,6 +173,7 @@ impl<G: GeneratedStep> Compiled<G> {
             step: G::from_model(model)?,
             x: vec![0.0; model.n_states],
             clockwork: Clockwork::new(model, stop.unwrap_or(model.sim.stop)),
+            watch: Watch::new(model, model.sim.zero_crossing),
             all_finite: true,
             meta: model.meta.clone(),
             in_ports: model.in_ports.clone(),
@@ -169,7 +201,14 @@ impl<G: GeneratedStep> Compiled<G> {
     }
 
     pub fn stats(&self) -> RunStats {
-        RunStats { major_steps: self.clockwork.major_steps, solver: self.clockwork.integ.stats(), events: 0 }
+        let events = self.watch.events;
+        RunStats { major_steps: self.clockwork.major_steps, solver: self.clockwork.integ.stats(), events }
+    }
+
+    /// What the run has to say beyond its numbers, as
+    /// [`crate::Simulator::warnings`].
+    pub fn warnings(&self) -> &[String] {
+        &self.watch.warnings
     }
 
     /// Whether the run counts its discrete rates in grid steps (every
@@ -244,6 +283,10 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
         self.all_finite = true;
         self.step.signals_mut().iter_mut().for_each(|s| *s = 0.0);
         self.step.initialize(&mut self.x);
+        self.watch.reset();
+        for b in 0..self.watch.blocks.len() {
+            self.step.freeze(b, self.watch.freezes());
+        }
     }
 
     /// The step checks what it writes; signals it did not write this time
@@ -252,7 +295,14 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
     fn output_sweep(&mut self) -> Result<(), SimError> {
         let c = &self.clockwork;
         let all = c.first || c.at_event;
-        let wrote_finite = self.step.outputs(c.t, &self.x, c.first, all, &c.hit);
+        let mut wrote_finite = self.step.outputs(c.t, &self.x, c.first, all, &c.hit);
+        if !self.watch.blocks.is_empty() {
+            if self.step.major_step_events(c.t, &mut self.x) {
+                wrote_finite = self.step.outputs(c.t, &self.x, c.first, all, &c.hit);
+            }
+            let (step, t, x) = (&mut self.step, c.t, &self.x);
+            self.watch.record_signs(|b, _, g| step.zero_crossings(b, t, false, x, true, g));
+        }
         if !(wrote_finite && self.all_finite) {
             self.all_finite = sim::all_finite(self.step.signals());
             if !self.all_finite {
@@ -292,6 +342,22 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
         }
     }
 
+    fn locate_crossing(&mut self, t0: f64, t1: f64, target: f64) -> Result<Option<f64>, SimError> {
+        if self.watch.blocks.is_empty() {
+            return Ok(None);
+        }
+        let mut stage = Stage { step: &mut self.step, t_end: target };
+        let x = &mut self.x[..self.clockwork.n_integrated];
+        let Some(t) = self.watch.locate(&mut stage, &mut self.clockwork.integ, t0, t1, x) else { return Ok(None) };
+        for (b, _, k) in self.watch.fired() {
+            self.step.crossing_located(b, k);
+        }
+        if let Some((b, _)) = self.watch.count_event(t, &self.meta)? {
+            self.step.freeze(b, false);
+        }
+        Ok(Some(t))
+    }
+
     fn clamp_states(&mut self) -> bool {
         self.step.clamp_states(&mut self.x[..self.clockwork.n_integrated])
     }
@@ -305,7 +371,7 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
     }
 
     fn plain_grid_steps(&self) -> bool {
-        !G::KEEPS_HISTORY
+        !G::KEEPS_HISTORY && self.watch.blocks.is_empty()
     }
 
     fn names(&self) -> &[BlockMeta] {

@@ -42,6 +42,9 @@ struct Gen<'m> {
     n_constants: usize,
     /// The held LTI blocks and their one input, in the simulator's order.
     held: Vec<(usize, Port)>,
+    /// The blocks whose zero crossings are watched, in the watch's order
+    /// (`sim/events.rs`); their modes freeze in minor steps as `fz` says.
+    watched: Vec<usize>,
 }
 
 impl<'m> Gen<'m> {
@@ -64,7 +67,7 @@ impl<'m> Gen<'m> {
             })
             .collect();
         let held = model.between.held.iter().map(|&i| (i, model.in_ports[model.slots[i].inputs.start])).collect();
-        Gen { model, visits, n_constants, held }
+        Gen { model, visits, n_constants, held, watched: crate::sim::events::watched(model) }
     }
 
     /// `const IN_i` and `OUT_i` for every block called through a view
@@ -105,6 +108,13 @@ impl<'m> Gen<'m> {
             };
             let _ = writeln!(out, "    z{j}: {zoh},\n    u{j}: [f64; {}],", input.width);
         }
+        if !self.watched.is_empty() {
+            let _ = writeln!(
+                out,
+                "    /// Per watched block: whether its modes freeze in minor steps.\n    fz: [bool; {}],",
+                self.watched.len()
+            );
+        }
         out.push_str("}\n\n");
     }
 
@@ -125,6 +135,7 @@ impl<'m> Gen<'m> {
         self.left_limits(out);
         self.clamp_states(out);
         self.next_event(out);
+        self.crossings(out);
         self.diagnose(out);
         out.push_str("}\n");
     }
@@ -171,6 +182,9 @@ impl<'m> Gen<'m> {
             };
             let _ =
                 writeln!(out, "            z{j}: cg::{take}(model, {i})?,\n            u{j}: [0.0; {}],", input.width);
+        }
+        if !self.watched.is_empty() {
+            let _ = writeln!(out, "            fz: [false; {}],", self.watched.len());
         }
         out.push_str("        })\n    }\n\n");
     }
@@ -244,7 +258,7 @@ impl<'m> Gen<'m> {
                     k.u1
                 ),
             },
-            None => format!("self.b{i}.output(&mut {});", io(i, left, &v.states, minor)),
+            None => format!("self.b{i}.output(&mut {});", self.io(i, left, minor)),
         }
     }
 
@@ -255,7 +269,7 @@ impl<'m> Gen<'m> {
         self.fix_hits(out);
         bind_signals(out);
         for v in self.visits.iter().filter(|v| v.updates) {
-            let call = format!("self.b{}.update(&mut {});", v.index, io(v.index, "false", &v.states, false));
+            let call = format!("self.b{}.update(&mut {});", v.index, self.io(v.index, "false", false));
             match v.rate {
                 Rate::Constant => {}
                 Rate::Continuous => {
@@ -317,10 +331,19 @@ impl<'m> Gen<'m> {
             let _ = writeln!(
                 out,
                 "        self.b{i}.derivatives(&{}, &mut dx[{}]);",
-                io(i, "left", states, true),
+                self.io(i, "left", true),
                 range(states)
             );
         }
+        out.push_str("    }\n\n");
+        out.push_str(
+            "    #[allow(unused_variables)]\n    fn minor_outputs(&mut self, t: f64, left: bool, x: &[f64]) {\n",
+        );
+        if n > 0 {
+            fix_states(out, false, n);
+        }
+        bind_signals(out);
+        self.minor_outputs(out, "left");
         out.push_str("    }\n\n");
     }
 
@@ -347,11 +370,7 @@ impl<'m> Gen<'m> {
             bind_signals(out);
             self.minor_outputs(out, "true");
             for i in keeping {
-                let _ = writeln!(
-                    out,
-                    "        self.b{i}.left_limit(&{}, at);",
-                    io(i, "true", &self.visits[i].states, true)
-                );
+                let _ = writeln!(out, "        self.b{i}.left_limit(&{}, at);", self.io(i, "true", true));
             }
         }
         out.push_str("    }\n\n");
@@ -391,6 +410,70 @@ impl<'m> Gen<'m> {
             );
         }
         out.push_str("        next\n    }\n\n");
+    }
+
+    /// The watched blocks' zero crossings, by their entry `b` in the
+    /// watch: functions, directions, located crossings, the major-step
+    /// work and the frozen flags (what `sim/events.rs` asks of a back-end).
+    fn crossings(&self, out: &mut String) {
+        let arms = |out: &mut String, call: &dyn Fn(usize, usize) -> String, default: &str| {
+            out.push_str("        match b {\n");
+            for (b, &i) in self.watched.iter().enumerate() {
+                let _ = writeln!(out, "            {b} => {},", call(b, i));
+            }
+            let _ = writeln!(out, "            _ => {default},\n        }}\n    }}\n");
+        };
+        out.push_str(
+            "    #[allow(unused_variables)]\n    fn zero_crossings(&mut self, b: usize, t: f64, left: bool, x: &[f64], major: bool, g: &mut [f64]) {\n",
+        );
+        if !self.watched.is_empty() {
+            bind_signals(out);
+        }
+        arms(
+            out,
+            &|_, i| {
+                let (major, minor) = (self.io(i, "left", false), self.io(i, "left", true));
+                format!(
+                    "if major {{ self.b{i}.zero_crossings(&{major}, g) }} else {{ self.b{i}.zero_crossings(&{minor}, g) }}"
+                )
+            },
+            "{}",
+        );
+        out.push_str("    #[allow(unused_variables)]\n    fn crossing_direction(&self, b: usize, k: usize) -> ::ctlgraph_core::Crossing {\n");
+        arms(out, &|_, i| format!("self.b{i}.crossing_direction(k)"), "::ctlgraph_core::Crossing::Either");
+        out.push_str("    #[allow(unused_variables)]\n    fn crossing_located(&mut self, b: usize, k: usize) {\n");
+        arms(out, &|_, i| format!("self.b{i}.crossing_located(k)"), "{}");
+        out.push_str("    #[allow(unused_variables)]\n    fn freeze(&mut self, b: usize, frozen: bool) {\n");
+        arms(out, &|b, _| format!("self.fz[{b}] = frozen"), "{}");
+        out.push_str(
+            "    #[allow(unused_variables)]\n    fn major_step_events(&mut self, t: f64, x: &mut [f64]) -> bool {\n",
+        );
+        if !self.watched.is_empty() {
+            bind_signals(out);
+        }
+        out.push_str("        false");
+        for &i in &self.watched {
+            let states = &self.visits[i].states;
+            let x = if states.is_empty() { "&mut []".to_string() } else { format!("&mut x[{}]", range(states)) };
+            let _ = write!(
+                out,
+                "\n            | self.b{i}.major_step(&Io::new(t, false, &[], &mut *s, &IN_{i}, &OUT_{i}), {x})"
+            );
+        }
+        out.push_str("\n    }\n\n");
+    }
+
+    /// Block `i`'s view at time `t` over its states in `x` (a stage's
+    /// when `minor`: modes frozen when it is watched and `fz` says so).
+    fn io(&self, i: usize, left: &str, minor: bool) -> String {
+        let states = &self.visits[i].states;
+        let x = if states.is_empty() { "&[]".to_string() } else { format!("&x[{}]", range(states)) };
+        let view = format!("Io::new(t, {left}, {x}, &mut *s, &IN_{i}, &OUT_{i})");
+        match (minor, self.watched.iter().position(|&w| w == i)) {
+            (false, _) => view,
+            (true, Some(b)) => format!("{view}.in_minor_step(self.fz[{b}])"),
+            (true, None) => format!("{view}.in_minor_step(false)"),
+        }
     }
 
     fn diagnose(&self, out: &mut String) {
@@ -441,13 +524,6 @@ fn field_type(model: &Model, i: usize) -> String {
         Some(path) => format!("::{path}"),
         None => "Box<dyn Block>".into(),
     }
-}
-
-/// Block `i`'s view at time `t` over states `x[states]` (a stage's when `minor`).
-fn io(i: usize, left: &str, states: &std::ops::Range<usize>, minor: bool) -> String {
-    let x = if states.is_empty() { "&[]".to_string() } else { format!("&x[{}]", range(states)) };
-    let view = format!("Io::new(t, {left}, {x}, &mut *s, &IN_{i}, &OUT_{i})");
-    if minor { format!("{view}.in_minor_step(false)") } else { view }
 }
 
 fn range(r: &std::ops::Range<usize>) -> String {

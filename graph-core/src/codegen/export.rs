@@ -22,7 +22,7 @@ use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 /// Bumped whenever [`Api`] or the structs it passes change.
-pub const ABI_VERSION: u32 = 1;
+pub const ABI_VERSION: u32 = 2;
 
 /// The exported function returning the library's [`Api`].
 pub const SYMBOL: &[u8] = b"ctlgraph_accelerated_v1";
@@ -97,6 +97,7 @@ pub struct Stats {
     pub jacobians: u64,
     pub factorizations: u64,
     pub newton_failures: u64,
+    pub events: u64,
 }
 
 impl From<crate::RunStats> for Stats {
@@ -110,6 +111,7 @@ impl From<crate::RunStats> for Stats {
             jacobians: v.jacobians,
             factorizations: v.factorizations,
             newton_failures: v.newton_failures,
+            events: s.events,
         }
     }
 }
@@ -124,7 +126,7 @@ impl From<Stats> for crate::RunStats {
             factorizations: s.factorizations,
             newton_failures: s.newton_failures,
         };
-        crate::RunStats { major_steps: s.major_steps, solver, events: 0 }
+        crate::RunStats { major_steps: s.major_steps, solver, events: s.events }
     }
 }
 
@@ -143,6 +145,8 @@ pub type RunWhile =
     unsafe extern "C" fn(run: *mut c_void, sample: Sample, ctx: *mut c_void, error: *const TextSink) -> i32;
 pub type Time = unsafe extern "C" fn(run: *const c_void) -> f64;
 pub type GetStats = unsafe extern "C" fn(run: *const c_void) -> Stats;
+/// [`crate::Simulator::warnings`]: `sink` receives each, one call apiece.
+pub type Warnings = unsafe extern "C" fn(run: *const c_void, sink: *const TextSink);
 
 /// Everything a library offers, behind [`SYMBOL`].
 #[repr(C)]
@@ -155,6 +159,7 @@ pub struct Api {
     pub run_while: RunWhile,
     pub time: Time,
     pub stats: GetStats,
+    pub warnings: Warnings,
 }
 
 /// A generated step made into a library: its graphs are compiled with
@@ -174,6 +179,7 @@ impl Api {
             run_while: run_while::<G>,
             time: time::<G>,
             stats: stats::<G>,
+            warnings: warnings::<G>,
         }
     }
 }
@@ -292,4 +298,12 @@ unsafe extern "C" fn time<G: Exported>(run: *const c_void) -> f64 {
 unsafe extern "C" fn stats<G: Exported>(run: *const c_void) -> Stats {
     // SAFETY: `run` came from `create::<G>`.
     unsafe { &*run.cast::<Compiled<G>>() }.stats().into()
+}
+
+unsafe extern "C" fn warnings<G: Exported>(run: *const c_void, sink: *const TextSink) {
+    // SAFETY: `run` came from `create::<G>`; the loader's sink is valid for the call.
+    let (run, sink) = unsafe { (&*run.cast::<Compiled<G>>(), &*sink) };
+    for w in run.warnings() {
+        sink.send(w);
+    }
 }

@@ -12,8 +12,9 @@
 //! the simulator, so a generated step computes what the interpreter
 //! computes, to the bit (tested on every bundled graph it accepts).
 //!
-//! Accepted: every solver, and graphs without zero crossings, rows between
-//! steps or top-level inports. The interpreter runs the rest.
+//! Accepted: every solver, zero crossings (located by the interpreter's
+//! watch on the generated stages), and graphs without rows between steps
+//! or top-level inports. The interpreter runs the rest.
 
 mod driver;
 mod emit;
@@ -30,14 +31,6 @@ pub use driver::{
 /// Why a model cannot be generated: one sentence per reason.
 pub fn refusals(model: &Model) -> Vec<String> {
     let mut why = Vec::new();
-    for (meta, block) in model.meta.iter().zip(&model.blocks) {
-        if block.needs_major_step() {
-            why.push(format!(
-                "block `{}` ({}) has zero crossings, which the generated step does not locate",
-                meta.name, meta.type_name
-            ));
-        }
-    }
     if model.sim.output != crate::flatten::OutputTimes::Steps {
         why.push(
             "`simulation.output` records rows between steps from the dense output, which the generated step \

@@ -143,7 +143,8 @@ impl Clockwork {
 
 /// What a back-end provides the driver: the sweeps over its blocks, and
 /// what it knows of them. The hooks with a default are capabilities a
-/// back-end may lack (zero crossings, rows between steps).
+/// back-end may lack (zero crossings, rows between steps, hooks around a
+/// step).
 pub(crate) trait Sweeps {
     fn clockwork(&self) -> &Clockwork;
     fn clockwork_mut(&mut self) -> &mut Clockwork;

@@ -12,12 +12,33 @@
 //! with `zero_crossing: adaptive` turn that block's detection off with a
 //! warning. Either way a Zeno model cannot hang.
 
-use super::RunBlock;
-use super::{Minor, SimError, io_for};
-use crate::compile::Model;
+use super::SimError;
+use crate::block::Crossing;
+use crate::compile::{Model, Rate};
 use crate::flatten::ZeroCrossing;
-use ctlgraph_solver::Integrator;
+use ctlgraph_solver::{Integrator, OdeSystem};
 use std::ops::Range;
+
+/// What the watch evaluates inside a step, from either back-end: the
+/// solver's system (for the dense output) that also computes the
+/// continuous outputs at (t, x), modes frozen, and a watched block's
+/// functions there. `b` is the block's entry in [`Watch::blocks`], `i`
+/// its index in the model.
+pub(crate) trait Crossings: OdeSystem {
+    fn outputs(&mut self, t: f64, x: &[f64]);
+    /// Block `i`'s functions at (t, x), the outputs computed.
+    fn zero_crossings(&mut self, b: usize, i: usize, t: f64, x: &[f64], g: &mut [f64]);
+    /// Which sign changes of block `i`'s function `k` are events.
+    fn direction(&self, b: usize, i: usize, k: usize) -> Crossing;
+}
+
+/// The blocks whose zero crossings are watched: continuous ones that
+/// need major steps, in model order.
+pub(crate) fn watched(model: &Model) -> Vec<usize> {
+    (0..model.blocks.len())
+        .filter(|&i| model.meta[i].rate == Rate::Continuous && model.blocks[i].needs_major_step())
+        .collect()
+}
 
 /// Events in a row at nearly one time before the run counts as chattering
 /// (Simulink's default for "Number of consecutive zero crossings").
@@ -86,17 +107,14 @@ pub(crate) struct Watch {
 }
 
 impl Watch {
-    pub fn new(model: &Model, continuous: &[usize], mode: ZeroCrossing) -> Self {
-        let mut blocks = Vec::new();
+    pub fn new(model: &Model, mode: ZeroCrossing) -> Self {
+        let blocks = watched(model);
         let mut ranges = Vec::new();
         let mut n = 0;
-        for &i in continuous {
+        for &i in &blocks {
             let count = model.blocks[i].num_zero_crossings();
-            if model.blocks[i].needs_major_step() {
-                blocks.push(i);
-                ranges.push(n..n + count);
-                n += count;
-            }
+            ranges.push(n..n + count);
+            n += count;
         }
         Watch {
             mode,
@@ -121,15 +139,17 @@ impl Watch {
         }
     }
 
-    /// Back to the start of a run (detection re-enabled); marks in `blocks`
-    /// which blocks have their modes frozen in minor steps.
-    pub fn reset(&mut self, blocks: &mut [RunBlock]) {
-        let on = self.mode != ZeroCrossing::Off;
+    /// Whether the watched blocks' modes are frozen in minor steps (at
+    /// the start of a run: whether crossings are located).
+    pub fn freezes(&self) -> bool {
+        self.mode != ZeroCrossing::Off
+    }
+
+    /// Back to the start of a run (detection re-enabled; the back-end
+    /// freezes the watched blocks' modes again when [`Watch::freezes`]).
+    pub fn reset(&mut self) {
+        let on = self.freezes();
         self.active.iter_mut().for_each(|a| *a = on);
-        blocks.iter_mut().for_each(|b| b.frozen = false);
-        for &i in &self.blocks {
-            blocks[i].frozen = on;
-        }
         self.sign.iter_mut().for_each(|s| *s = 0.0);
         self.events = 0;
         self.consecutive = 0;
@@ -142,23 +162,23 @@ impl Watch {
     }
 
     /// At a major step, after the outputs: the functions' values and signs
-    /// that the next step's end is compared with.
+    /// that the next step's end is compared with; `eval(b, i, g)` gives
+    /// block `i`'s (entry `b`) functions at the major step.
     /// Inlined, so a graph without watched blocks pays one test, not a call.
     #[inline]
-    pub fn record_signs(&mut self, model: &Model, blocks: &mut [RunBlock], signals: &mut [f64], x: &[f64], t: f64) {
+    pub fn record_signs(&mut self, eval: impl FnMut(usize, usize, &mut [f64])) {
         if !self.blocks.is_empty() {
-            self.record_watched_signs(model, blocks, signals, x, t);
+            self.record_watched_signs(eval);
         }
     }
 
-    fn record_watched_signs(&mut self, model: &Model, blocks: &mut [RunBlock], signals: &mut [f64], x: &[f64], t: f64) {
+    fn record_watched_signs(&mut self, mut eval: impl FnMut(usize, usize, &mut [f64])) {
         for (b, &i) in self.blocks.iter().enumerate() {
             if !self.active[b] {
                 continue;
             }
             let r = self.ranges[b].clone();
-            let io = io_for(&model.slots[i], t, false, x, signals, &model.in_ports, &model.out_ports);
-            blocks[i].zero_crossings(&io, &mut self.g0[r.clone()]);
+            eval(b, i, &mut self.g0[r.clone()]);
             for k in r {
                 if self.g0[k] != 0.0 {
                     self.sign[k] = self.g0[k].signum();
@@ -178,13 +198,20 @@ impl Watch {
     /// is therefore read just after `t0` (CVODE does the same), so that it
     /// leaving and coming back within one step is still an event.
     #[inline]
-    pub fn locate(&mut self, sys: &mut Minor, integ: &mut Integrator, t0: f64, t1: f64, x: &mut [f64]) -> Option<f64> {
+    pub fn locate(
+        &mut self,
+        sys: &mut impl Crossings,
+        integ: &mut Integrator,
+        t0: f64,
+        t1: f64,
+        x: &mut [f64],
+    ) -> Option<f64> {
         if self.blocks.is_empty() { None } else { self.locate_watched(sys, integ, t0, t1, x) }
     }
 
     fn locate_watched(
         &mut self,
-        sys: &mut Minor,
+        sys: &mut impl Crossings,
         integ: &mut Integrator,
         t0: f64,
         t1: f64,
@@ -198,7 +225,7 @@ impl Watch {
         sys.outputs(t1, x);
         for (b, &i) in self.blocks.iter().enumerate() {
             if self.active[b] {
-                sys.zero_crossings(i, t1, x, &mut self.g1[self.ranges[b].clone()]);
+                sys.zero_crossings(b, i, t1, x, &mut self.g1[self.ranges[b].clone()]);
             }
         }
         // The earliest crossing: each later candidate is searched only up
@@ -219,7 +246,7 @@ impl Watch {
                     }
                 }
                 self.start_sign[k] = 0.0;
-                let direction = sys.blocks[self.blocks[b]].crossing_direction(k - self.ranges[b].start);
+                let direction = sys.direction(b, self.blocks[b], k - self.ranges[b].start);
                 if s == 0.0 || self.g1[k] * s >= 0.0 || !direction.accepts(s) {
                     continue;
                 }
@@ -242,7 +269,7 @@ impl Watch {
             if !self.active[b] {
                 continue;
             }
-            sys.zero_crossings(i, t, x, &mut self.g[self.ranges[b].clone()]);
+            sys.zero_crossings(b, i, t, x, &mut self.g[self.ranges[b].clone()]);
             for k in self.ranges[b].clone() {
                 if self.start_sign[k] != 0.0 && self.g[k] * self.start_sign[k] <= 0.0 {
                     self.fired[k] = true;
@@ -253,17 +280,26 @@ impl Watch {
         Some(t)
     }
 
-    /// The (model block, function of the block) pairs that fired at the
-    /// event [`Watch::locate`] found.
-    pub fn fired(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+    /// The functions that fired at the event [`Watch::locate`] found:
+    /// (entry in [`Watch::blocks`], model block, function of the block).
+    pub fn fired(&self) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
         self.blocks
             .iter()
             .zip(&self.ranges)
-            .flat_map(move |(&i, r)| r.clone().filter(|&k| self.fired[k]).map(move |k| (i, k - r.start)))
+            .enumerate()
+            .flat_map(move |(b, (&i, r))| r.clone().filter(|&k| self.fired[k]).map(move |k| (b, i, k - r.start)))
     }
 
     /// Function `k` (of block entry `b`) at time `t` inside the last step.
-    fn value(&mut self, sys: &mut Minor, integ: &mut Integrator, x1: &[f64], b: usize, k: usize, t: f64) -> f64 {
+    fn value(
+        &mut self,
+        sys: &mut impl Crossings,
+        integ: &mut Integrator,
+        x1: &[f64],
+        b: usize,
+        k: usize,
+        t: f64,
+    ) -> f64 {
         let xt: &[f64] = if x1.is_empty() {
             x1
         } else {
@@ -271,7 +307,7 @@ impl Watch {
             &self.x_trial
         };
         sys.outputs(t, xt);
-        sys.zero_crossings(self.blocks[b], t, xt, &mut self.g[self.ranges[b].clone()]);
+        sys.zero_crossings(b, self.blocks[b], t, xt, &mut self.g[self.ranges[b].clone()]);
         self.g[k]
     }
 
@@ -283,7 +319,7 @@ impl Watch {
     #[allow(clippy::too_many_arguments)]
     fn root(
         &mut self,
-        sys: &mut Minor,
+        sys: &mut impl Crossings,
         integ: &mut Integrator,
         x1: &[f64],
         b: usize,
@@ -326,8 +362,12 @@ impl Watch {
 
     /// Counts a located event at `t`; past the chattering limit, an error
     /// or (adaptive) the block's detection switched off, returning the
-    /// model block whose modes must no longer be frozen.
-    pub fn count_event(&mut self, t: f64, model: &Model) -> Result<Option<usize>, SimError> {
+    /// block whose modes must no longer be frozen (entry `b`, model block).
+    pub fn count_event(
+        &mut self,
+        t: f64,
+        names: &[crate::compile::BlockMeta],
+    ) -> Result<Option<(usize, usize)>, SimError> {
         self.events += 1;
         let scale = t.abs().max(1.0);
         let interval = t - self.last_event;
@@ -345,7 +385,7 @@ impl Watch {
         };
         let b = self.last_block;
         let block = self.blocks[b];
-        let name = model.meta[block].name.clone();
+        let name = names[block].name.clone();
         if self.mode != ZeroCrossing::Adaptive {
             return Err(SimError::Chattering { t, block: name, what });
         }
@@ -354,6 +394,6 @@ impl Watch {
         self.shrinking = 0;
         self.warnings
             .push(format!("t = {t}: block `{name}` chattered ({what}); its crossings are ignored from here on"));
-        Ok(Some(block))
+        Ok(Some((b, block)))
     }
 }

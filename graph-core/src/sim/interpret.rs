@@ -78,10 +78,10 @@ impl Simulator {
         let x = &mut x[..clockwork.n_integrated];
         let Some(t) = watch.locate(&mut sys, &mut clockwork.integ, t0, t1, x) else { return Ok(None) };
         let s = &mut self.state;
-        for (block, k) in s.watch.fired() {
+        for (_, block, k) in s.watch.fired() {
             s.blocks[block].crossing_located(k);
         }
-        if let Some(block) = s.watch.count_event(t, &self.model)? {
+        if let Some((_, block)) = s.watch.count_event(t, &self.model.meta)? {
             s.blocks[block].frozen = false;
         }
         Ok(Some(t))
@@ -117,7 +117,11 @@ impl Sweeps for Simulator {
         for (b, m) in s.blocks.iter_mut().zip(&self.model.slots) {
             b.initialize(&mut s.x[m.states.clone()]);
         }
-        s.watch.reset(&mut s.blocks);
+        s.watch.reset();
+        s.blocks.iter_mut().for_each(|b| b.frozen = false);
+        for &i in &s.watch.blocks {
+            s.blocks[i].frozen = s.watch.freezes();
+        }
         if let Some(dense) = &mut s.dense {
             dense.reset();
         }
@@ -131,7 +135,10 @@ impl Sweeps for Simulator {
         }
         let s = &mut self.state;
         s.inputs_changed = false;
-        s.watch.record_signs(&self.model, &mut s.blocks, &mut s.signals, &s.x, s.clockwork.t);
+        let (m, t, x, signals, blocks) = (&*self.model, s.clockwork.t, &s.x, &mut s.signals, &s.blocks);
+        s.watch.record_signs(|_, i, g| {
+            blocks[i].zero_crossings(&io_for(&m.slots[i], t, false, x, signals, &m.in_ports, &m.out_ports), g);
+        });
         if !all_finite(&s.signals) {
             let s = &self.state;
             return Err(Blame::of(&self.model).signal(&s.signals, s.clockwork.t, |i| s.blocks[i].diagnose()));

@@ -1,9 +1,11 @@
 //! The system the ODE solver integrates between major steps: continuous
 //! outputs recomputed at each stage, discrete outputs held.
 
+use super::events::Crossings;
 use super::io_for;
 use super::state::RunBlock;
 use super::visit::{ComputedAt, Integrand, Visit, sweep};
+use crate::block::Crossing;
 use crate::compile::Model;
 use ctlgraph_solver::OdeSystem;
 
@@ -60,14 +62,6 @@ impl Minor<'_> {
         );
     }
 
-    /// Block `i`'s zero-crossing functions at (t, x), outputs computed.
-    pub(super) fn zero_crossings(&mut self, i: usize, t: f64, x: &[f64], g: &mut [f64]) {
-        let (m, block) = (self.model, &self.blocks[i]);
-        let io = io_for(&m.slots[i], t, t >= self.t_end, x, self.signals, &m.in_ports, &m.out_ports)
-            .in_minor_step(block.frozen);
-        block.zero_crossings(&io, g);
-    }
-
     /// The stateful blocks' derivatives at (t, x), outputs computed.
     #[inline(always)]
     fn stateful_derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
@@ -81,6 +75,23 @@ impl Minor<'_> {
         for integrator in self.integrands {
             integrator.derivatives(self.signals, dx);
         }
+    }
+}
+
+impl Crossings for Minor<'_> {
+    fn outputs(&mut self, t: f64, x: &[f64]) {
+        Minor::outputs(self, t, x);
+    }
+
+    fn zero_crossings(&mut self, _b: usize, i: usize, t: f64, x: &[f64], g: &mut [f64]) {
+        let (m, block) = (self.model, &self.blocks[i]);
+        let io = io_for(&m.slots[i], t, t >= self.t_end, x, self.signals, &m.in_ports, &m.out_ports)
+            .in_minor_step(block.frozen);
+        block.zero_crossings(&io, g);
+    }
+
+    fn direction(&self, _b: usize, i: usize, k: usize) -> Crossing {
+        self.blocks[i].crossing_direction(k)
     }
 }
 

@@ -15,7 +15,7 @@ mod breakpoints;
 mod clock;
 pub(crate) mod driver;
 mod error;
-mod events;
+pub(crate) mod events;
 mod host;
 mod interpret;
 mod minor;
@@ -112,9 +112,7 @@ impl Simulator {
     pub fn new(model: impl Into<Arc<Model>>, stop: Option<f64>) -> Self {
         let model: Arc<Model> = model.into();
         let stop = stop.unwrap_or(model.sim.stop);
-        let continuous: Vec<usize> =
-            (0..model.meta.len()).filter(|&i| model.meta[i].rate == Rate::Continuous).collect();
-        let watch = Watch::new(&model, &continuous, model.sim.zero_crossing);
+        let watch = Watch::new(&model, model.sim.zero_crossing);
         let mut latched = 0;
         let held = model
             .between
