@@ -7,7 +7,9 @@
 //! own blocks without the interpreter (computing what it computes, to the
 //! bit): the price of the blocks' code apart from the interpreter's.
 //! `fladrc_compiled` and `ladrc_compiled` run the graphs' generated steps
-//! (`ctlgraph codegen`, built by the `ctlgraph-compiled-graphs` crate).
+//! (`ctlgraph codegen`, built by the `ctlgraph-compiled-graphs` crate);
+//! `fladrc_accelerated` and `ladrc_accelerated` the same steps as
+//! `--accelerate` builds, loads and runs them.
 //!
 //!     cargo bench --bench fladrc
 
@@ -20,8 +22,10 @@ use nalgebra::Matrix3;
 use std::hint::black_box;
 use std::path::Path;
 
+mod accelerated;
 mod fused_ladrc;
 mod paired;
+use ctlgraph::accel::AcceleratedRun;
 use fused_ladrc::{Fused, H, Noise, SAMPLES};
 use paired::Paired;
 
@@ -263,6 +267,28 @@ fn compiled<G: GeneratedStep>((run, y): &mut (Compiled<G>, usize)) -> (f64, f64)
     (sink, last)
 }
 
+/// The graph's accelerated run, as `graph`.
+fn accelerated_run(run: &mut AcceleratedRun, y: usize) -> (f64, f64) {
+    run.reset();
+    let mut sink = 0.0;
+    let mut last = 0.0;
+    run.run_while(&mut |_, s| {
+        sink += s[y];
+        last = s[y];
+        true
+    })
+    .expect("runs");
+    (sink, last)
+}
+
+/// The graph `file`'s accelerated run, and where it records y.
+fn library(file: &str) -> (AcceleratedRun, usize) {
+    let model = model(file, &[]);
+    let y = model.columns.iter().find(|c| c.name == "y").expect("y recorded").offset;
+    let text = std::fs::read_to_string(file).expect("the graph");
+    (accelerated::accelerated(&model, &text, file), y)
+}
+
 fn bench(c: &mut Criterion) {
     let zoh = plant_zoh();
     let fuzzy = Fuzzy::new(-0.2, 0.2);
@@ -280,12 +306,23 @@ fn bench(c: &mut Criterion) {
     assert_eq!(by_fused, by_graph, "the fused blocks compute what the interpreter does, to the bit");
     let mut fladrc_compiled = generated::<graphs_fladrc_fladrc::Step>("graphs/fladrc/fladrc.yaml");
     let mut ladrc_compiled = generated::<graphs_fladrc_ladrc::Step>("graphs/fladrc/ladrc.yaml");
-    for (by_compiled, file) in [
-        (compiled(&mut fladrc_compiled), "graphs/fladrc/fladrc.yaml"),
-        (compiled(&mut ladrc_compiled), "graphs/fladrc/ladrc.yaml"),
+    let (mut fladrc_library, mut ladrc_library) =
+        (library("graphs/fladrc/fladrc.yaml"), library("graphs/fladrc/ladrc.yaml"));
+    for (by_compiled, by_library, file) in [
+        (
+            compiled(&mut fladrc_compiled),
+            accelerated_run(&mut fladrc_library.0, fladrc_library.1),
+            "graphs/fladrc/fladrc.yaml",
+        ),
+        (
+            compiled(&mut ladrc_compiled),
+            accelerated_run(&mut ladrc_library.0, ladrc_library.1),
+            "graphs/fladrc/ladrc.yaml",
+        ),
     ] {
         let by_graph = graph(&mut simulator(file, &[]));
         assert_eq!(by_compiled, by_graph, "{file}: the generated step computes what the interpreter does, to the bit");
+        assert_eq!(by_library, by_graph, "{file}: the accelerated run computes what the interpreter does, to the bit");
     }
     let sigma = (1.44e-5f64 / 0.004).sqrt();
     const GROUP: &str = "fladrc_scenario_20k_samples";
@@ -298,6 +335,8 @@ fn bench(c: &mut Criterion) {
         Paired::new(GROUP, "ladrc_fused_blocks", "ladrc_hand_written"),
         Paired::new(GROUP, "fladrc_compiled", "fladrc_hand_written"),
         Paired::new(GROUP, "ladrc_compiled", "ladrc_hand_written"),
+        Paired::new(GROUP, "fladrc_accelerated", "fladrc_hand_written"),
+        Paired::new(GROUP, "ladrc_accelerated", "ladrc_hand_written"),
     ];
     let (fladrc_by_hand, ladrc_by_hand) =
         (|| hand_written(Some(&fuzzy), sigma, zoh), || hand_written(None, sigma, zoh));
@@ -305,11 +344,17 @@ fn bench(c: &mut Criterion) {
     group.bench_function("fladrc_hand_written", |b| b.iter(|| black_box(fladrc_by_hand())));
     group.bench_function("fladrc_ctlgraph", |b| paired[0].run(b, || graph(&mut sim), fladrc_by_hand));
     group.bench_function("fladrc_compiled", |b| paired[3].run(b, || compiled(&mut fladrc_compiled), fladrc_by_hand));
+    group.bench_function("fladrc_accelerated", |b| {
+        paired[5].run(b, || accelerated_run(&mut fladrc_library.0, fladrc_library.1), fladrc_by_hand)
+    });
     let mut sim = simulator("graphs/fladrc/ladrc.yaml", &[]);
     group.bench_function("ladrc_hand_written", |b| b.iter(|| black_box(ladrc_by_hand())));
     group.bench_function("ladrc_ctlgraph", |b| paired[1].run(b, || graph(&mut sim), ladrc_by_hand));
     group.bench_function("ladrc_fused_blocks", |b| paired[2].run(b, || fused.run(sigma), ladrc_by_hand));
     group.bench_function("ladrc_compiled", |b| paired[4].run(b, || compiled(&mut ladrc_compiled), ladrc_by_hand));
+    group.bench_function("ladrc_accelerated", |b| {
+        paired[6].run(b, || accelerated_run(&mut ladrc_library.0, ladrc_library.1), ladrc_by_hand)
+    });
     group.finish();
     paired.iter().for_each(|p| p.save(CRITERION_SAMPLES));
     // The fuzzy system alone, one evaluation, hand-written and as a block.

@@ -4,7 +4,8 @@
 //! graph's own blocks called without the interpreter (`fused_blocks`),
 //! which splits the overhead into the interpreter's and the blocks' code —
 //! and against the graph's generated step (`compiled`, `ctlgraph codegen`,
-//! built by the `ctlgraph-compiled-graphs` crate).
+//! built by the `ctlgraph-compiled-graphs` crate), and that step as
+//! `--accelerate` builds, loads and runs it (`accelerated`).
 //!
 //!     cargo bench --bench overhead
 
@@ -15,8 +16,10 @@ use ctlgraph_core::codegen::Compiled;
 use ctlgraph_solver::{Integrator, Method, OdeSystem};
 use std::hint::black_box;
 
+mod accelerated;
 mod fused_pid;
 mod paired;
+use ctlgraph::accel::AcceleratedRun;
 use fused_pid::{Fused, GRAPH, STEP, STEPS};
 use paired::Paired;
 
@@ -96,8 +99,22 @@ fn compiled(run: &mut Compiled<Step>, ctrl: usize) -> f64 {
     sink
 }
 
+/// The accelerated run, as `graph`: Σu over the major steps (its last
+/// advance not taken; it adds nothing to Σu).
+fn accelerated(run: &mut AcceleratedRun, ctrl: usize) -> f64 {
+    run.reset();
+    let (mut sink, mut steps) = (0.0, 0);
+    let _ = run.run_while(&mut |_, s| {
+        sink += s[ctrl];
+        steps += 1;
+        steps < STEPS
+    });
+    sink
+}
+
 fn bench(c: &mut Criterion) {
     let model = ctlgraph::compile_str(GRAPH, "bench.yaml", &[]).expect("graph compiles");
+    let mut library = accelerated::accelerated(&model, GRAPH, "bench.yaml");
     let offset = |name: &str| model.columns.iter().find(|c| c.name == name).expect("recorded").offset;
     let (plant, ctrl) = (offset("plant"), offset("ctrl"));
     let mut fused = Fused::new(&model);
@@ -110,6 +127,7 @@ fn bench(c: &mut Criterion) {
     assert!((by_graph - by_hand).abs() < 1e-12, "graph {by_graph} vs hand {by_hand}");
     assert_eq!(fused.run(), sum_u, "the fused blocks compute what the interpreter does, to the bit");
     assert_eq!(compiled(&mut generated, ctrl), sum_u, "the generated step computes what the interpreter does");
+    assert_eq!(accelerated(&mut library, ctrl), sum_u, "the accelerated run computes what the interpreter does");
     const GROUP: &str = "pid_loop_10k_rk4_steps";
     const CRITERION_SAMPLES: usize = 100;
     let mut group = c.benchmark_group(GROUP);
@@ -118,11 +136,13 @@ fn bench(c: &mut Criterion) {
         Paired::new(GROUP, "ctlgraph", "hand_written"),
         Paired::new(GROUP, "fused_blocks", "hand_written"),
         Paired::new(GROUP, "compiled", "hand_written"),
+        Paired::new(GROUP, "accelerated", "hand_written"),
     ];
     group.bench_function("hand_written", |b| b.iter(|| black_box(hand_written().0)));
     group.bench_function("ctlgraph", |b| paired[0].run(b, || graph(&mut sim), hand_written));
     group.bench_function("fused_blocks", |b| paired[1].run(b, || fused.run(), hand_written));
     group.bench_function("compiled", |b| paired[2].run(b, || compiled(&mut generated, ctrl), hand_written));
+    group.bench_function("accelerated", |b| paired[3].run(b, || accelerated(&mut library, ctrl), hand_written));
     group.finish();
     paired.iter().for_each(|p| p.save(CRITERION_SAMPLES));
 }

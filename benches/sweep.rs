@@ -2,12 +2,14 @@
 //! kd (400 cases), on one and on two worker threads, side by side; and the
 //! cases on one thread compiled each from its text (what a sweep did
 //! before cases were compiled on the structure) beside the sweep's way
-//! (parsed once, each case's blocks built on the first's structure).
+//! (parsed once, each case's blocks built on the first's structure); and
+//! the FLADRC scenario over 200 noise seeds on two jobs, interpreted and
+//! accelerated (`--accelerate`: one step library for every case).
 //!
 //!     cargo bench --bench sweep
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use ctlgraph::accel::Runner;
+use ctlgraph::accel::{Accelerate, Runner};
 use ctlgraph::sweep::{self, Keep, SweepSpec, Vary};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -36,6 +38,27 @@ fn bench(c: &mut Criterion) {
                     .len()
             })
         });
+    }
+    group.finish();
+
+    let file = Path::new("graphs/fladrc/fladrc.yaml");
+    let fladrc = std::fs::read_to_string(file).expect("the FLADRC graph");
+    let seeds = SweepSpec { vary: Vec::new(), random: None, seeds: Some((1, 200)), draw_seed: 0, shard: None };
+    let seed_cases = sweep::cases(&seeds).expect("cases");
+    let model = ctlgraph::compile_file(file, &[]).expect("compiles");
+    let (accelerated, _) = Runner::choose(Accelerate::Require, &model, file, &fladrc).expect("the step library builds");
+    let table = |runner: &Runner| sweep::run(runner, &fladrc, file, &[], &seed_cases, 2, &keep, &stop, &|| {});
+    let (by_interpreter, by_library) = (table(&Runner::Interpreted).expect("runs"), table(&accelerated).expect("runs"));
+    let checks = |rows: &[sweep::Row]| rows.iter().map(|r| r.result.clone()).collect::<Vec<_>>();
+    assert_eq!(
+        checks(&by_interpreter),
+        checks(&by_library),
+        "the accelerated sweep measures what the interpreted one does"
+    );
+    let mut group = c.benchmark_group("fladrc_sweep_200_seeds");
+    group.sample_size(10);
+    for (name, runner) in [("interpreted", &Runner::Interpreted), ("accelerated", &accelerated)] {
+        group.bench_function(name, |b| b.iter(|| table(runner).expect("runs").len()));
     }
     group.finish();
 

@@ -153,6 +153,27 @@ pub fn tables(root: &Path) -> Result<String, String> {
     )?;
     beside_hand(
         &mut out,
+        "accelerated (`--accelerate`)",
+        &[
+            (
+                "FLADRC paper (`fladrc`)",
+                fladrc,
+                "fladrc_scenario_20k_samples/fladrc_accelerated",
+                SCENARIO_SAMPLES,
+                "sample",
+            ),
+            (
+                "LADRC paper (`fladrc`)",
+                ladrc,
+                "fladrc_scenario_20k_samples/ladrc_accelerated",
+                SCENARIO_SAMPLES,
+                "sample",
+            ),
+            ("tutorial PID loop (`overhead`)", pid, "pid_loop_10k_rk4_steps/accelerated", PID_STEPS, "step"),
+        ],
+    )?;
+    beside_hand(
+        &mut out,
         "blocks fused by hand",
         &[
             (
@@ -198,6 +219,14 @@ pub fn tables(root: &Path) -> Result<String, String> {
         duration(two),
         grouped(400.0 / two),
         one / two
+    ));
+    let (interpreted, accelerated) =
+        (m("fladrc_sweep_200_seeds/interpreted")?, m("fladrc_sweep_200_seeds/accelerated")?);
+    out.push_str(&format!(
+        "\nThe FLADRC scenario over 200 seeds on two jobs (`sweep`): {} interpreted, {} accelerated, a {:.2}× speed-up.\n",
+        duration(interpreted),
+        duration(accelerated),
+        interpreted / accelerated
     ));
     Ok(out)
 }

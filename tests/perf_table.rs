@@ -31,6 +31,11 @@ fn tables_divide_the_medians_as_they_say() {
         ("fladrc_scenario_20k_samples/fladrc_compiled", 6.0 * ms),
         ("fladrc_scenario_20k_samples/ladrc_compiled", 0.9 * ms),
         ("pid_loop_10k_rk4_steps/compiled", 1.25 * ms),
+        ("fladrc_scenario_20k_samples/fladrc_accelerated", 4.0 * ms),
+        ("fladrc_scenario_20k_samples/ladrc_accelerated", 0.45 * ms),
+        ("pid_loop_10k_rk4_steps/accelerated", 0.6 * ms),
+        ("fladrc_sweep_200_seeds/interpreted", 2000.0 * ms),
+        ("fladrc_sweep_200_seeds/accelerated", 1600.0 * ms),
         ("fuzzy_7x7_two_outputs/hand_written", 300.0),
         ("fuzzy_7x7_two_outputs/ctlgraph_fis", 150.0),
         ("chain_compile/10", 0.2 * ms),
@@ -61,6 +66,9 @@ fn tables_divide_the_medians_as_they_say() {
         ("fladrc_scenario_20k_samples/fladrc_compiled", 1.25),
         ("fladrc_scenario_20k_samples/ladrc_compiled", 3.5),
         ("pid_loop_10k_rk4_steps/compiled", 2.75),
+        ("fladrc_scenario_20k_samples/fladrc_accelerated", 0.75),
+        ("fladrc_scenario_20k_samples/ladrc_accelerated", 1.4),
+        ("pid_loop_10k_rk4_steps/accelerated", 1.1),
     ] {
         let json = format!(r#"{{"median_ratio":{ratio},"samples":30,"reference":"x"}}"#);
         std::fs::write(root.join(id).join("paired_ratio.json"), json).unwrap();
@@ -80,6 +88,18 @@ fn tables_divide_the_medians_as_they_say() {
     assert!(text.contains(generated), "{text}");
     assert!(text.contains("| 300 µs (15.0 ns/sample) | 900 µs (45.0 ns/sample) | 3.00× | 3.50× |"), "{text}");
     assert!(text.contains("| 500 µs (50.0 ns/step) | 1.25 ms (125 ns/step) | 2.50× | 2.75× |"), "{text}");
+    // The accelerated runs' table, likewise.
+    let accelerated = "| FLADRC paper (`fladrc`) | 5.00 ms (250 ns/sample) | 4.00 ms (200 ns/sample) | 0.80× | 0.75× |";
+    assert!(text.contains("| accelerated (`--accelerate`) | hand-written |"), "{text}");
+    assert!(text.contains(accelerated), "{text}");
+    assert!(text.contains("| 300 µs (15.0 ns/sample) | 450 µs (22.5 ns/sample) | 1.50× | 1.40× |"), "{text}");
+    assert!(text.contains("| 500 µs (50.0 ns/step) | 600 µs (60.0 ns/step) | 1.20× | 1.10× |"), "{text}");
+    assert!(
+        text.contains(
+            "over 200 seeds on two jobs (`sweep`): 2.00 s interpreted, 1.60 s accelerated, a 1.25× speed-up."
+        ),
+        "{text}"
+    );
     // 1 s for 100 steps of 100 000 blocks: 100 ns a block-step; by hand
     // 30 ms: 3 ns. Past the fixed part (the chain of none: 100 ns a step,
     // by hand 10 ns), at 10 gains: (500 − 100)/10 and (40 − 10)/10.

@@ -93,6 +93,12 @@ impl Drop for AcceleratedRun {
 }
 
 impl AcceleratedRun {
+    /// Back to t = 0 with initial states, as [`ctlgraph_core::Simulator::reset`].
+    pub fn reset(&mut self) {
+        // SAFETY: `run` is live and owned by this value.
+        unsafe { (self.lib.api.reset)(self.run) }
+    }
+
     pub fn time(&self) -> f64 {
         // SAFETY: `run` is live.
         unsafe { (self.lib.api.time)(self.run) }

@@ -22,7 +22,7 @@ use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 /// Bumped whenever [`Api`] or the structs it passes change.
-pub const ABI_VERSION: u32 = 2;
+pub const ABI_VERSION: u32 = 3;
 
 /// The exported function returning the library's [`Api`].
 pub const SYMBOL: &[u8] = b"ctlgraph_accelerated_v1";
@@ -140,6 +140,8 @@ pub const FAILED: i32 = -1;
 /// Loads, compiles and prepares a run; null (and a message) when it cannot.
 pub type Create = unsafe extern "C" fn(spec: *const Spec, error: *const TextSink) -> *mut c_void;
 pub type Destroy = unsafe extern "C" fn(run: *mut c_void);
+/// [`crate::Simulator::reset`]: back to t = 0 with initial states.
+pub type Reset = unsafe extern "C" fn(run: *mut c_void);
 /// [`crate::Simulator::run_while`]: [`FINISHED`], [`CUT`] or [`FAILED`].
 pub type RunWhile =
     unsafe extern "C" fn(run: *mut c_void, sample: Sample, ctx: *mut c_void, error: *const TextSink) -> i32;
@@ -156,6 +158,7 @@ pub struct Api {
     pub fingerprint: u64,
     pub create: Create,
     pub destroy: Destroy,
+    pub reset: Reset,
     pub run_while: RunWhile,
     pub time: Time,
     pub stats: GetStats,
@@ -176,6 +179,7 @@ impl Api {
             fingerprint: G::FINGERPRINT,
             create: create::<G>,
             destroy: destroy::<G>,
+            reset: reset::<G>,
             run_while: run_while::<G>,
             time: time::<G>,
             stats: stats::<G>,
@@ -260,6 +264,14 @@ unsafe extern "C" fn destroy<G: Exported>(run: *mut c_void) {
         // SAFETY: `run` came from `create::<G>` and is destroyed once.
         let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(run.cast::<Compiled<G>>()) })));
     }
+}
+
+unsafe extern "C" fn reset<G: Exported>(run: *mut c_void) {
+    // SAFETY: `run` came from `create::<G>`; the loader owns it alone.
+    let run = unsafe { &mut *run.cast::<Compiled<G>>() };
+    // Resetting runs the blocks' `initialize`, plain code that does not
+    // panic; were one to, the run would be left as it is.
+    let _ = catch_unwind(AssertUnwindSafe(|| run.reset()));
 }
 
 unsafe extern "C" fn run_while<G: Exported>(
