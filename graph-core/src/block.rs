@@ -106,7 +106,7 @@ impl Crossing {
 }
 
 /// The width of a port.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Width {
     Fixed(usize),
     /// The block's common width, resolved from its neighbours at compile

@@ -13,10 +13,12 @@ use super::between::Between;
 use super::wiring::instantiate;
 use super::wiring::set_common_width;
 use super::{Model, Node, Rate, compile, headers, plan_and_advise, refuse_too_many_steps};
+use crate::block::SampleTime;
 use crate::diag::Diagnostic;
 use crate::flatten::FlatGraph;
 use crate::registry::Registry;
 use std::collections::hash_map::DefaultHasher;
+use std::fmt::Write;
 use std::hash::{Hash, Hasher};
 
 /// What a model keeps of its structure to recognise it in another loaded graph.
@@ -43,23 +45,51 @@ impl Structure {
     }
 }
 
+/// Hashed field by field: one pass over the blocks and wires (a graph's
+/// bulk), the few records and the analysis section through their `Debug`
+/// text, written into the hasher without a string in between.
 fn shape(g: &FlatGraph) -> u64 {
     let mut h = DefaultHasher::new();
     for b in &g.blocks {
         (&b.path, &b.spec.type_name).hash(&mut h);
     }
+    for end in g.wires.iter().flat_map(|w| [&w.src, &w.dst]) {
+        (&end.block, &end.port, end.pos.line, end.pos.col).hash(&mut h);
+    }
     let mut subsystems: Vec<_> = g.subsystems.iter().collect();
     subsystems.sort_by_key(|(path, _)| path.as_str());
-    format!("{:?}{:?}{:?}{:?}", g.wires, g.records, g.analysis, subsystems).hash(&mut h);
+    let _ = write!(Hashing(&mut h), "{:?}{:?}{:?}", g.records, g.analysis, subsystems);
     g.record_every.hash(&mut h);
     h.finish()
 }
 
 fn signature(node: &Node) -> u64 {
     let mut h = DefaultHasher::new();
-    format!("{:?}", node.iface).hash(&mut h);
-    node.is_virtual.hash(&mut h);
+    let iface = &node.iface;
+    for p in &iface.inputs {
+        (&p.name, p.width, p.feedthrough).hash(&mut h);
+    }
+    for p in &iface.outputs {
+        (&p.name, p.width).hash(&mut h);
+    }
+    match iface.sample_time {
+        SampleTime::Discrete { period, offset } => (1u8, period.to_bits(), offset.to_bits()).hash(&mut h),
+        SampleTime::Continuous => 2u8.hash(&mut h),
+        SampleTime::Inherited => 3u8.hash(&mut h),
+        SampleTime::Constant => 4u8.hash(&mut h),
+    }
+    (iface.inputs.len(), iface.piecewise_constant, node.is_virtual).hash(&mut h);
     h.finish()
+}
+
+/// A hasher taking formatted text.
+struct Hashing<'a>(&'a mut DefaultHasher);
+
+impl std::fmt::Write for Hashing<'_> {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        self.0.write(s.as_bytes());
+        Ok(())
+    }
 }
 
 /// Compiles `g`, reusing `base`'s structure where `g` has the same.
