@@ -22,7 +22,7 @@ macro_rules! rust_type {
 pub mod adrc;
 #[cfg(test)]
 mod block_tests;
-#[cfg(test)]
+#[cfg(all(test, feature = "implicit"))]
 mod build_tests;
 pub mod continuous;
 pub mod delay;

@@ -8,7 +8,9 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod cascade;
+#[cfg(feature = "implicit")]
 pub mod dense_lu;
+#[cfg(feature = "implicit")]
 pub mod freq;
 pub mod lti;
 pub mod ode;

@@ -49,13 +49,14 @@ pub fn library(model: &Model) -> Result<(Arc<Library>, Cost), String> {
         .map_err(|why| format!("the generated step does not cover this graph: {}", why.join("; ")))?;
     let (code, fingerprint) = (module.code, module.fingerprint);
     let dir = toolchain::cache_dir()?;
-    let key = toolchain::key(&code);
+    let features = toolchain::Features { implicit: matches!(model.sim.method, ctlgraph_solver::Method::Trbdf2 { .. }) };
+    let key = toolchain::key(&code, features);
     let path = toolchain::library_path(&dir, &key);
     if path.is_file() {
         let lib = Library::open(&path, fingerprint)?;
         return Ok((lib, Cost::Loaded(start.elapsed().as_secs_f64())));
     }
-    toolchain::build(&dir, &key, &code)?;
+    toolchain::build(&dir, &key, &code, features)?;
     let lib = Library::open(&path, fingerprint)?;
     Ok((lib, Cost::Built(start.elapsed().as_secs_f64())))
 }

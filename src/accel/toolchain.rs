@@ -36,11 +36,27 @@ pub fn cache_dir() -> Result<PathBuf, String> {
     Ok(base.join("accelerate"))
 }
 
+/// What a step library is built with besides its code: whether it has
+/// the implicit method (TR-BDF2, over faer), which only a stiff graph's
+/// needs; without it the first build on a machine is much shorter.
+#[derive(Clone, Copy)]
+pub struct Features {
+    pub implicit: bool,
+}
+
+impl Features {
+    /// The features the library's dependencies are built with, as the
+    /// manifest writes them after `default-features = false`.
+    fn manifest(self) -> &'static str {
+        if self.implicit { ", features = [\"implicit\"]" } else { "" }
+    }
+}
+
 /// The library's name in the cache for the generated `code`.
-pub fn key(code: &str) -> String {
+pub fn key(code: &str, features: Features) -> String {
     use sha2::{Digest, Sha256};
     let mut h = Sha256::new();
-    for part in [code, env!("CARGO_PKG_VERSION"), RUSTC_VERSION, SOURCE_HASH] {
+    for part in [code, features.manifest(), env!("CARGO_PKG_VERSION"), RUSTC_VERSION, SOURCE_HASH] {
         h.update(part.as_bytes());
         h.update([0]);
     }
@@ -85,7 +101,7 @@ fn unable() -> Option<String> {
 
 /// Builds the library for `key` from the generated `code` into the cache
 /// `dir`; returns the build's wall time in seconds.
-pub fn build(dir: &Path, key: &str, code: &str) -> Result<f64, String> {
+pub fn build(dir: &Path, key: &str, code: &str, features: Features) -> Result<f64, String> {
     if let Some(why) = unable() {
         return Err(why);
     }
@@ -94,8 +110,11 @@ pub fn build(dir: &Path, key: &str, code: &str) -> Result<f64, String> {
     std::fs::create_dir_all(&krate).map_err(io(&krate))?;
     let name = format!("ctlgraph_step_{key}");
     let source = Path::new(SOURCE_DIR);
-    let files =
-        [("Cargo.toml", manifest(&name, source)), ("lib.rs", LIB_RS.to_string()), ("step.rs", code.to_string())];
+    let files = [
+        ("Cargo.toml", manifest(&name, source, features)),
+        ("lib.rs", LIB_RS.to_string()),
+        ("step.rs", code.to_string()),
+    ];
     for (file, text) in files {
         std::fs::write(krate.join(file), text).map_err(io(&krate.join(file)))?;
     }
@@ -142,12 +161,15 @@ const LIB_RS: &str = "#[allow(clippy::all, unused)]\nmod step;\n\
 /// The library crate's manifest. Its own workspace (a cache inside another
 /// project's folder must not join that workspace); one codegen unit, so
 /// the step's calls into the blocks inline as in a crate of the workspace.
-fn manifest(name: &str, source: &Path) -> String {
+fn manifest(name: &str, source: &Path, features: Features) -> String {
     let path = |krate: &str| source.join(krate).display().to_string().replace('\\', "/");
+    let features = features.manifest();
     format!(
         "[package]\nname = \"{name}\"\nversion = \"0.0.0\"\nedition = \"2024\"\npublish = false\n\n\
          [lib]\npath = \"lib.rs\"\ncrate-type = [\"cdylib\"]\n\n\
-         [dependencies]\nctlgraph-core = {{ path = \"{}\" }}\nctlgraph-blocks = {{ path = \"{}\" }}\n\n\
+         [dependencies]\n\
+         ctlgraph-core = {{ path = \"{}\", default-features = false{features} }}\n\
+         ctlgraph-blocks = {{ path = \"{}\", default-features = false{features} }}\n\n\
          [profile.release]\ndebug = false\n\n\
          [profile.release.package.{name}]\ncodegen-units = 1\n\n\
          [workspace]\n",

@@ -7,7 +7,9 @@
 //! the teeth leaving the cut and the harmonics of the tooth passing.
 
 use super::Cutter;
-use ctlgraph_solver::freq::c64;
+/// A complex number (num-complex's, as faer's `c64` is).
+#[allow(non_camel_case_types)]
+pub type c64 = nalgebra::Complex<f64>;
 use std::f64::consts::{PI, TAU};
 
 /// The average directional factors `[[αxx, αxy], [αyx, αyy]]` of a cut

@@ -13,7 +13,23 @@
 //! over it (Dormand–Prince's own continuous extension, cubic Hermite for
 //! the others), which the simulator uses to locate zero crossings.
 
+#[cfg(feature = "implicit")]
 mod trbdf2;
+#[cfg(feature = "implicit")]
+use trbdf2::Work as ImplicitWork;
+
+/// Without the implicit method there is no work space for it (an
+/// `Option` of this is always `None`).
+#[cfg(not(feature = "implicit"))]
+#[derive(Clone)]
+enum ImplicitWork {}
+
+#[cfg(not(feature = "implicit"))]
+impl ImplicitWork {
+    fn reset(&mut self) {
+        match *self {}
+    }
+}
 
 use std::fmt;
 
@@ -140,6 +156,8 @@ pub enum SolverError {
     NonFinite { t: f64, state: Option<usize> },
     /// The Newton matrix `I − d·h·J` is singular at `t`.
     Singular { t: f64 },
+    /// The method is not in this build (the `implicit` feature is off).
+    NotBuilt { method: &'static str },
 }
 
 impl fmt::Display for SolverError {
@@ -152,6 +170,9 @@ impl fmt::Display for SolverError {
             SolverError::NonFinite { t, state: Some(i) } => write!(f, "state {i} is not finite at t = {t}"),
             SolverError::NonFinite { t, state: None } => write!(f, "state is not finite at t = {t}"),
             SolverError::Singular { t } => write!(f, "the Newton matrix is singular at t = {t}"),
+            SolverError::NotBuilt { method } => {
+                write!(f, "`{method}` is not in this build of ctlgraph-solver (its feature `implicit` is off)")
+            }
         }
     }
 }
@@ -163,7 +184,7 @@ impl SolverError {
     pub fn state(&self) -> Option<usize> {
         match *self {
             SolverError::StepTooSmall { state, .. } | SolverError::NonFinite { state, .. } => state,
-            SolverError::Singular { .. } => None,
+            SolverError::Singular { .. } | SolverError::NotBuilt { .. } => None,
         }
     }
 }
@@ -281,7 +302,18 @@ pub struct Integrator {
     /// Hermite methods: whether `k[6]` holds `f` at the end of the last step.
     f1_valid: bool,
     /// Work space of the implicit method (`None` for explicit ones).
-    implicit: Option<Box<trbdf2::Work>>,
+    implicit: Option<Box<ImplicitWork>>,
+}
+
+/// The implicit method's work space, when `method` is it.
+fn implicit_work(method: Method, n: usize) -> Option<Box<ImplicitWork>> {
+    #[cfg(feature = "implicit")]
+    return matches!(method, Method::Trbdf2 { .. }).then(|| Box::new(ImplicitWork::new(n)));
+    #[cfg(not(feature = "implicit"))]
+    {
+        let _ = (method, n);
+        None
+    }
 }
 
 impl Integrator {
@@ -300,7 +332,7 @@ impl Integrator {
             t0: 0.0,
             h: 0.0,
             f1_valid: false,
-            implicit: matches!(method, Method::Trbdf2 { .. }).then(|| Box::new(trbdf2::Work::new(n))),
+            implicit: implicit_work(method, n),
         }
     }
 
@@ -367,9 +399,12 @@ impl Integrator {
             Method::DormandPrince { rtol, atol, max_step, initial_step } => {
                 self.dopri5(sys, t, t_limit, x, Tolerance { rtol, atol, max_step, initial_step })?
             }
+            #[cfg(feature = "implicit")]
             Method::Trbdf2 { rtol, atol, max_step, initial_step } => {
                 self.trbdf2(sys, t, t_limit, x, Tolerance { rtol, atol, max_step, initial_step })?
             }
+            #[cfg(not(feature = "implicit"))]
+            Method::Trbdf2 { .. } => return Err(SolverError::NotBuilt { method: "trbdf2" }),
         };
         if !self.method.is_adaptive() {
             self.stats.steps += 1;
@@ -403,7 +438,10 @@ impl Integrator {
             return;
         }
         let (f0, f1): (&[f64], &[f64]) = match &self.implicit {
+            #[cfg(feature = "implicit")]
             Some(w) => (&w.f_prev, &w.f0),
+            #[cfg(not(feature = "implicit"))]
+            Some(w) => match **w {},
             None => {
                 if !self.f1_valid {
                     self.stats.evaluations += 1;
