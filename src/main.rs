@@ -158,7 +158,7 @@ enum Command {
     /// Write the graph's step as Rust that calls its blocks directly (docs/compiled-step.md).
     #[command(after_help = "Example:\n  ctlgraph codegen graphs/fladrc/ladrc.yaml --out src/ladrc_step.rs\n\n\
                       The module defines `Step`; run it with `ctlgraph_core::codegen::Compiled::<Step>::new(&model, None)`.\n\
-                      Accepted: any solver, zero crossings; no rows between steps or top-level inports.")]
+                      Accepted: any solver, zero crossings, inports (at their given values); no rows between steps.")]
     Codegen {
         /// The graph file (YAML).
         graph: PathBuf,

@@ -100,7 +100,7 @@ fn a_generated_step_whose_signal_overflows_stops_as_the_interpreter_does_and_sta
 }
 
 #[test]
-fn the_papers_loops_adaptive_runs_and_events_are_generated_and_inports_refused_with_a_reason() {
+fn the_papers_loops_adaptive_runs_events_and_inports_are_generated_and_dense_rows_refused_with_a_reason() {
     let generated: Vec<&str> = GENERATED.iter().map(|(p, _)| *p).collect();
     // The papers' loops, with the contact and cutting forces' crossings;
     // adaptive runs: dopri5 (with a transport delay's breakpoints in
@@ -119,12 +119,13 @@ fn the_papers_loops_adaptive_runs_and_events_are_generated_and_inports_refused_w
         "graphs/events/thermostat.yaml",
         "graphs/stiff/van_der_pol.yaml",
         "graphs/stiff/robertson.yaml",
+        "graphs/tutorial/controller_io.yaml",
     ] {
         assert!(generated.contains(&path), "{path} has no generated step; refused: {REFUSED:?}");
     }
     let (_, why) =
-        REFUSED.iter().find(|(p, _)| *p == "graphs/tutorial/controller_io.yaml").expect("inports are refused");
-    assert!(why.contains("top-level inport"), "{why}");
+        REFUSED.iter().find(|(p, _)| *p == "graphs/events/antiwindup_dead_time.yaml").expect("dense rows are refused");
+    assert!(why.contains("rows between steps"), "{why}");
 }
 
 /// Past the bouncing ball's Zeno point: the chattering error, or with
@@ -177,12 +178,12 @@ fn codegen_writes_the_module_or_says_why_it_cannot() {
     let code = std::fs::read_to_string(&file).unwrap();
     assert_eq!(code, ctlgraph_core::codegen::generate(&model).unwrap());
     assert!(code.contains("pub struct Step") && code.contains("::ctlgraph_blocks::adrc::Leso"), "{code}");
-    // Top-level inports: exit 1, the reason, and no file.
-    let refused = dir.path().join("io.rs");
-    let out = ctlgraph(&["codegen", "graphs/tutorial/controller_io.yaml", "--out", path(&refused)]);
+    // Rows between steps: exit 1, the reason, and no file.
+    let refused = dir.path().join("antiwindup.rs");
+    let out = ctlgraph(&["codegen", "graphs/events/antiwindup_dead_time.yaml", "--out", path(&refused)]);
     assert_eq!(out.status.code(), Some(1));
     let stderr = text(&out.stderr);
-    assert!(stderr.contains("cannot generate a step") && stderr.contains("top-level inport"), "{stderr}");
+    assert!(stderr.contains("cannot generate a step") && stderr.contains("rows between steps"), "{stderr}");
     assert!(!refused.exists());
     // The graph file itself is never the output.
     let out = ctlgraph(&["codegen", "graphs/fladrc/ladrc.yaml", "--out", "graphs/fladrc/ladrc.yaml"]);
