@@ -1,7 +1,7 @@
-//! Generates the step of every bundled graph `ctlgraph_core::codegen`
-//! accepts (`graphs/**/*.yaml`, `benches/*.yaml`, and `compiled/graphs/*.yaml`,
-//! which exist to test the generator) into `OUT_DIR`, and an
-//! index of them (`graphs.rs`) for `src/lib.rs` to include.
+//! Generates the step of every bundled graph (`graphs/**/*.yaml`,
+//! `benches/*.yaml`, and `compiled/graphs/*.yaml`, which exist to test the
+//! generator) into `OUT_DIR`, and an index of them (`graphs.rs`) for
+//! `src/lib.rs` to include.
 
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -16,7 +16,7 @@ fn main() {
     }
     files.sort();
     let registry = ctlgraph_blocks::registry();
-    let (mut modules, mut accepted, mut refused) = (String::new(), String::new(), String::new());
+    let (mut modules, mut generated) = (String::new(), String::new());
     for file in files {
         let relative = file.strip_prefix(root).expect("under the root").to_string_lossy().replace('\\', "/");
         // A file that does not compile on its own (a part of a
@@ -25,26 +25,18 @@ fn main() {
         else {
             continue;
         };
-        match ctlgraph_core::codegen::generate(&model) {
-            Ok(code) => {
-                let module = relative.trim_end_matches(".yaml").replace(['/', '-', '.'], "_");
-                std::fs::write(out.join(format!("{module}.rs")), code).expect("OUT_DIR is writable");
-                let _ = writeln!(
-                    modules,
-                    "#[allow(clippy::all, clippy::pedantic)]\npub mod {module} {{\n    include!(concat!(env!(\"OUT_DIR\"), \"/{module}.rs\"));\n}}"
-                );
-                let _ = writeln!(accepted, "    (\"{relative}\", trace::<{module}::Step>),");
-            }
-            Err(why) => {
-                let _ = writeln!(refused, "    (\"{relative}\", {:?}),", why.join("; "));
-            }
-        }
+        let code = ctlgraph_core::codegen::generate(&model);
+        let module = relative.trim_end_matches(".yaml").replace(['/', '-', '.'], "_");
+        std::fs::write(out.join(format!("{module}.rs")), code).expect("OUT_DIR is writable");
+        let _ = writeln!(
+            modules,
+            "#[allow(clippy::all, clippy::pedantic)]\npub mod {module} {{\n    include!(concat!(env!(\"OUT_DIR\"), \"/{module}.rs\"));\n}}"
+        );
+        let _ = writeln!(generated, "    (\"{relative}\", trace::<{module}::Step>),");
     }
     let index = format!(
-        "{modules}\n/// Every bundled graph with a generated step, and its run.\n\
-         pub const GENERATED: &[(&str, Trace)] = &[\n{accepted}];\n\n\
-         /// The bundled graphs the generator refuses, and why.\n\
-         pub const REFUSED: &[(&str, &str)] = &[\n{refused}];\n"
+        "{modules}\n/// Every bundled graph's generated step, and its run.\n\
+         pub const GENERATED: &[(&str, Trace)] = &[\n{generated}];\n"
     );
     std::fs::write(out.join("graphs.rs"), index).expect("OUT_DIR is writable");
 }

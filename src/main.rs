@@ -158,7 +158,7 @@ enum Command {
     /// Write the graph's step as Rust that calls its blocks directly (docs/compiled-step.md).
     #[command(after_help = "Example:\n  ctlgraph codegen graphs/fladrc/ladrc.yaml --out src/ladrc_step.rs\n\n\
                       The module defines `Step`; run it with `ctlgraph_core::codegen::Compiled::<Step>::new(&model, None)`.\n\
-                      Accepted: any solver, zero crossings, inports (at their given values); no rows between steps.")]
+                      Any graph: every solver, zero crossings, rows between steps; inports hold their given values.")]
     Codegen {
         /// The graph file (YAML).
         graph: PathBuf,
@@ -307,8 +307,7 @@ fn codegen(graph: &Path, out: Option<&Path>, sets: &[String]) -> Result<(), Fail
         return Err(Diagnostic::plain(format!("--out {}: that is the graph file", path.display())).into());
     }
     let model = compile(graph, sets)?;
-    let code = ctlgraph_core::codegen::generate(&model)
-        .map_err(|why| Failure::Run(format!("{}: cannot generate a step:\n  {}", graph.display(), why.join("\n  "))))?;
+    let code = ctlgraph_core::codegen::generate(&model);
     match out {
         Some(path) => ctlgraph::record::write_atomic(path, code.as_bytes())
             .map_err(|e| Failure::Run(format!("{}: {e}", path.display()))),

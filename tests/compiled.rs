@@ -6,7 +6,7 @@
 mod common;
 use common::{ctlgraph, path, text};
 use ctlgraph::compile_file;
-use ctlgraph_compiled_graphs::{GENERATED, REFUSED, compiled_graphs_clocks};
+use ctlgraph_compiled_graphs::{GENERATED, compiled_graphs_clocks};
 use ctlgraph_core::codegen::Compiled;
 use ctlgraph_core::{Model, Simulator};
 use std::path::Path;
@@ -100,7 +100,7 @@ fn a_generated_step_whose_signal_overflows_stops_as_the_interpreter_does_and_sta
 }
 
 #[test]
-fn the_papers_loops_adaptive_runs_events_and_inports_are_generated_and_dense_rows_refused_with_a_reason() {
+fn every_bundled_graph_is_generated() {
     let generated: Vec<&str> = GENERATED.iter().map(|(p, _)| *p).collect();
     // The papers' loops, with the contact and cutting forces' crossings;
     // adaptive runs: dopri5 (with a transport delay's breakpoints in
@@ -120,12 +120,32 @@ fn the_papers_loops_adaptive_runs_events_and_inports_are_generated_and_dense_row
         "graphs/stiff/van_der_pol.yaml",
         "graphs/stiff/robertson.yaml",
         "graphs/tutorial/controller_io.yaml",
+        "graphs/events/antiwindup_dead_time.yaml",
+        "compiled/graphs/rows.yaml",
     ] {
-        assert!(generated.contains(&path), "{path} has no generated step; refused: {REFUSED:?}");
+        assert!(generated.contains(&path), "{path} has no generated step");
     }
-    let (_, why) =
-        REFUSED.iter().find(|(p, _)| *p == "graphs/events/antiwindup_dead_time.yaml").expect("dense rows are refused");
-    assert!(why.contains("rows between steps"), "{why}");
+}
+
+/// Rows between steps, from the dense output: RK4's Hermite interpolant
+/// with a held LTI block stepped over part of a step (`refine`), and a
+/// grid of rows that falls between and on steps (`every`); dopri5's
+/// continuous extension in `antiwindup_dead_time` is compared with every
+/// bundled graph.
+#[test]
+fn generated_rows_between_steps_equal_the_interpreters() {
+    use ctlgraph_compiled_graphs::compiled_graphs_rows::Step;
+    const PATH: &str = "compiled/graphs/rows.yaml";
+    let text = std::fs::read_to_string(PATH).unwrap();
+    for output in ["refine: 4", "every: 0.0033", "every: 0.01"] {
+        let text = text.replace("refine: 4", output);
+        let model = || ctlgraph::compile_str(&text, PATH, &[]).unwrap();
+        let mut got = Vec::new();
+        Compiled::<Step>::new(&model(), None).unwrap().run(|t, s| got.push((t, s.to_vec()))).unwrap();
+        let expected = interpreted_with(model());
+        assert!(expected.len() > 50, "{output}: {} rows", expected.len());
+        assert_same(&format!("{PATH} {output}"), &got, &expected);
+    }
 }
 
 /// Past the bouncing ball's Zeno point: the chattering error, or with
@@ -169,22 +189,15 @@ fn a_step_refuses_a_graph_of_another_structure() {
 }
 
 #[test]
-fn codegen_writes_the_module_or_says_why_it_cannot() {
+fn codegen_writes_the_module_and_never_over_the_graph() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("ladrc.rs");
     let out = ctlgraph(&["codegen", "graphs/fladrc/ladrc.yaml", "--out", path(&file)]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stderr));
     let model = compile_file(Path::new("graphs/fladrc/ladrc.yaml"), &[]).unwrap();
     let code = std::fs::read_to_string(&file).unwrap();
-    assert_eq!(code, ctlgraph_core::codegen::generate(&model).unwrap());
+    assert_eq!(code, ctlgraph_core::codegen::generate(&model));
     assert!(code.contains("pub struct Step") && code.contains("::ctlgraph_blocks::adrc::Leso"), "{code}");
-    // Rows between steps: exit 1, the reason, and no file.
-    let refused = dir.path().join("antiwindup.rs");
-    let out = ctlgraph(&["codegen", "graphs/events/antiwindup_dead_time.yaml", "--out", path(&refused)]);
-    assert_eq!(out.status.code(), Some(1));
-    let stderr = text(&out.stderr);
-    assert!(stderr.contains("cannot generate a step") && stderr.contains("rows between steps"), "{stderr}");
-    assert!(!refused.exists());
     // The graph file itself is never the output.
     let out = ctlgraph(&["codegen", "graphs/fladrc/ladrc.yaml", "--out", "graphs/fladrc/ladrc.yaml"]);
     assert_eq!(out.status.code(), Some(2));

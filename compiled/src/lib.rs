@@ -7,22 +7,21 @@
 use ctlgraph_core::Model;
 use ctlgraph_core::codegen::{Compiled, GeneratedStep};
 
-/// Runs a generated step on `model` for at most `major_steps` major
-/// steps; returns each major step's time and signals (as
-/// `Simulator::run` hands them to its sink).
-pub type Trace = fn(model: &Model, major_steps: usize) -> Result<Vec<(f64, Vec<f64>)>, String>;
+/// Runs a generated step on `model` for at most `rows` rows; returns
+/// each row's time and signals as `Simulator::run_while` hands them to its
+/// sink (a row at every major step, and between steps under
+/// `simulation.output`).
+pub type Trace = fn(model: &Model, rows: usize) -> Result<Vec<(f64, Vec<f64>)>, String>;
 
-fn trace<G: GeneratedStep>(model: &Model, major_steps: usize) -> Result<Vec<(f64, Vec<f64>)>, String> {
+fn trace<G: GeneratedStep>(model: &Model, rows: usize) -> Result<Vec<(f64, Vec<f64>)>, String> {
     let mut run = Compiled::<G>::new(model, None)?;
     let mut steps = Vec::new();
-    loop {
-        run.outputs().map_err(|e| e.to_string())?;
-        steps.push((run.time(), run.signals().to_vec()));
-        if run.finished() || steps.len() > major_steps {
-            return Ok(steps);
-        }
-        run.advance().map_err(|e| e.to_string())?;
-    }
+    run.run_while(|t, signals| {
+        steps.push((t, signals.to_vec()));
+        steps.len() <= rows
+    })
+    .map_err(|e| e.to_string())?;
+    Ok(steps)
 }
 
 include!(concat!(env!("OUT_DIR"), "/graphs.rs"));

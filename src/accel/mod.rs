@@ -7,7 +7,7 @@
 //! ([`library`]) and runs it: the library compiles the graph from the same
 //! text, overrides and seed, and runs it through the same driver as the
 //! interpreter, so the results are the interpreter's, to the bit. Where it
-//! cannot — no toolchain, a graph the generated step does not cover — the
+//! cannot — no toolchain, another compiler, ctlgraph's source changed — the
 //! run is interpreted and says why in one line; `--accelerate=require`
 //! makes that an error.
 
@@ -45,8 +45,7 @@ impl std::fmt::Display for Cost {
 /// `Err` says in one sentence why there is none.
 pub fn library(model: &Model) -> Result<(Arc<Library>, Cost), String> {
     let start = Instant::now();
-    let module = ctlgraph_core::codegen::module(model)
-        .map_err(|why| format!("the generated step does not cover this graph: {}", why.join("; ")))?;
+    let module = ctlgraph_core::codegen::module(model);
     let (code, fingerprint) = (module.code, module.fingerprint);
     let dir = toolchain::cache_dir()?;
     let features = toolchain::Features { implicit: matches!(model.sim.method, ctlgraph_solver::Method::Trbdf2 { .. }) };

@@ -6,6 +6,7 @@
 use crate::block::{Breakpoint, Crossing, Kernel, Port};
 use crate::compile::{BlockMeta, Model};
 use crate::sim::events::{Crossings, Watch};
+use crate::sim::output::{Dense, RowSystem};
 use crate::sim::{self, Blame, Clockwork, RunStats, SimError, Sweeps, driver};
 use ctlgraph_solver::{OdeSystem, Zoh, ZohSingleInput};
 
@@ -36,6 +37,11 @@ pub trait GeneratedStep: Sized {
     fn derivatives(&mut self, t: f64, left: bool, x: &[f64], dx: &mut [f64]);
     /// A stage's continuous outputs alone (for locating a crossing).
     fn minor_outputs(&mut self, t: f64, left: bool, x: &[f64]);
+    /// A row between steps: the continuous outputs (event-only blocks'
+    /// held) at (t, x), x all states.
+    fn row_outputs(&mut self, t: f64, left: bool, x: &[f64]);
+    /// Held LTI block `j`'s latched input.
+    fn held_input(&self, j: usize) -> &[f64];
     /// Watched block `b`'s zero-crossing functions at (t, x), outputs
     /// computed: at a major step (`major`), or in a stage (modes frozen
     /// as [`GeneratedStep::freeze`] set them). The watched blocks are
@@ -71,6 +77,12 @@ pub fn kernel(model: &Model, index: usize) -> Option<Kernel> {
 pub fn transition(model: &Model, index: usize) -> Result<Zoh, String> {
     let lti = model.blocks.get(index).and_then(|b| b.lti()).ok_or_else(|| mismatch(model, index))?;
     Ok(Zoh::new(lti.clone()))
+}
+
+/// The held LTI blocks' states and transitions, in the simulator's order
+/// (for rows between steps, which step them over part of a step).
+fn held_transitions(model: &Model) -> Result<Vec<(std::ops::Range<usize>, Zoh)>, String> {
+    model.between.held.iter().map(|&i| Ok((model.slots[i].states.clone(), transition(model, i)?))).collect()
 }
 
 /// [`transition`] of a block of `N` states and one input, stepped at
@@ -120,6 +132,8 @@ pub struct Compiled<G: GeneratedStep> {
     clockwork: Clockwork,
     /// The zero-crossing watch (`sim/events.rs`), as the interpreter's.
     watch: Watch,
+    /// Rows between steps (`sim/output.rs`), as the interpreter's.
+    dense: Option<Dense>,
     /// Whether every signal was finite after the last output sweep.
     all_finite: bool,
     /// For naming a block in an error.
@@ -137,6 +151,24 @@ struct Stage<'a, G> {
 impl<G: GeneratedStep> OdeSystem for Stage<'_, G> {
     fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
         self.step.derivatives(t, t >= self.t_end, x, dx);
+    }
+}
+
+impl<G: GeneratedStep> RowSystem for Stage<'_, G> {
+    fn set_step_end(&mut self, t_end: f64) {
+        self.t_end = t_end;
+    }
+
+    fn row_outputs(&mut self, t: f64, x: &[f64]) {
+        self.step.row_outputs(t, t >= self.t_end, x);
+    }
+
+    fn signals(&self) -> &[f64] {
+        self.step.signals()
+    }
+
+    fn latched(&self, j: usize) -> &[f64] {
+        self.step.held_input(j)
     }
 }
 
@@ -158,22 +190,19 @@ impl<G: GeneratedStep> Compiled<G> {
     /// A run of `model` to `stop` (the graph's own when `None`); `Err` when
     /// `G` was generated for a model of another structure.
     pub fn new(model: &Model, stop: Option<f64>) -> Result<Self, String> {
-        match super::fingerprint(model) {
-            Some(f) if f == G::FINGERPRINT => {}
-            Some(_) => {
-                return Err(format!(
-                    "`{}` is not the graph this step was generated for (its blocks, wiring or \
-                     rates differ); regenerate it with `ctlgraph codegen`",
-                    model.file
-                ));
-            }
-            None => return Err(format!("`{}`: {}", model.file, super::refusals(model).join("; "))),
+        if super::fingerprint(model) != G::FINGERPRINT {
+            return Err(format!(
+                "`{}` is not the graph this step was generated for (its blocks, wiring or \
+                 rates differ); regenerate it with `ctlgraph codegen`",
+                model.file
+            ));
         }
         let mut run = Compiled {
             step: G::from_model(model)?,
             x: vec![0.0; model.n_states],
             clockwork: Clockwork::new(model, stop.unwrap_or(model.sim.stop)),
             watch: Watch::new(model, model.sim.zero_crossing),
+            dense: Dense::new(model.sim.output, model.n_states, model.between.n_integrated, held_transitions(model)?),
             all_finite: true,
             meta: model.meta.clone(),
             in_ports: model.in_ports.clone(),
@@ -284,6 +313,9 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
         self.step.signals_mut().iter_mut().for_each(|s| *s = 0.0);
         self.step.initialize(&mut self.x);
         self.watch.reset();
+        if let Some(dense) = &mut self.dense {
+            dense.reset();
+        }
         for b in 0..self.watch.blocks.len() {
             self.step.freeze(b, self.watch.freezes());
         }
@@ -371,7 +403,7 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
     }
 
     fn plain_grid_steps(&self) -> bool {
-        !G::KEEPS_HISTORY && self.watch.blocks.is_empty()
+        !G::KEEPS_HISTORY && self.watch.blocks.is_empty() && self.dense.is_none()
     }
 
     fn names(&self) -> &[BlockMeta] {
@@ -380,5 +412,33 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
 
     fn blame_states(&self) -> SimError {
         self.blame().state(self.step.signals(), self.clockwork.t, &self.x)
+    }
+
+    fn step_started(&mut self, t0: f64) {
+        if let Some(dense) = &mut self.dense {
+            dense.start(t0, &self.x);
+        }
+    }
+
+    fn solver_reached(&mut self, t: f64) {
+        if let Some(dense) = &mut self.dense {
+            dense.solver_end(t, &self.x[..self.clockwork.n_integrated]);
+        }
+    }
+
+    fn step_ended(&mut self) {
+        if let Some(dense) = &mut self.dense {
+            dense.end(self.clockwork.t);
+        }
+    }
+
+    fn major_row(&mut self, t: f64) -> Option<f64> {
+        self.dense.as_mut().map_or(Some(t), |dense| dense.major_row(t))
+    }
+
+    fn rows_inside_step(&mut self, sink: &mut dyn FnMut(f64, &[f64]) -> bool) -> bool {
+        let Some(dense) = &mut self.dense else { return true };
+        let mut stage = Stage { step: &mut self.step, t_end: 0.0 };
+        dense.rows(&mut self.clockwork.integ, &mut stage, sink)
     }
 }

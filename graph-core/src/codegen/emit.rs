@@ -132,6 +132,7 @@ impl<'m> Gen<'m> {
         self.updates(out);
         self.held(out);
         self.derivatives(out);
+        self.rows(out);
         self.left_limits(out);
         self.clamp_states(out);
         self.next_event(out);
@@ -345,6 +346,26 @@ impl<'m> Gen<'m> {
         bind_signals(out);
         self.minor_outputs(out, "left");
         out.push_str("    }\n\n");
+    }
+
+    /// A row between steps (`simulation.output`): the continuous blocks'
+    /// outputs but the event-only ones, at (t, x) over all states, as the
+    /// simulator's rows compute them; and the held blocks' latched inputs.
+    fn rows(&self, out: &mut String) {
+        let m = self.model;
+        out.push_str(
+            "    #[allow(unused_variables)]\n    fn row_outputs(&mut self, t: f64, left: bool, x: &[f64]) {\n",
+        );
+        fix_states(out, false, m.n_states);
+        bind_signals(out);
+        for v in self.visits.iter().filter(|v| v.rate == Rate::Continuous && !v.event_only) {
+            let _ = writeln!(out, "        {}", self.output_call(v, "left", true));
+        }
+        out.push_str("    }\n\n    #[allow(unused_variables)]\n    fn held_input(&self, j: usize) -> &[f64] {\n        match j {\n");
+        for j in 0..self.held.len() {
+            let _ = writeln!(out, "            {j} => &self.u{j},");
+        }
+        out.push_str("            _ => &[],\n        }\n    }\n\n");
     }
 
     /// The minor step's output sweep, `left` the left-limit flag's expression.

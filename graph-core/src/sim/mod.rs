@@ -19,7 +19,7 @@ pub(crate) mod events;
 mod host;
 mod interpret;
 mod minor;
-mod output;
+pub(crate) mod output;
 mod state;
 pub(crate) mod visit;
 pub(crate) use blame::Blame;
@@ -77,6 +77,10 @@ pub struct Simulator {
     regular: Vec<Visit>,
     /// The blocks whose outputs minor steps recompute (`Between::minor`).
     minor: Vec<Visit>,
+    /// The blocks a row between steps recomputes: the continuous ones but
+    /// the plain integrators (copied) and event-only blocks (constant
+    /// between events).
+    row_visits: Vec<Visit>,
     /// Those of them the first stage recomputes when the signals hold the
     /// major step's outputs ([`stale_at_start`]), and whether they do:
     /// set by a major step's outputs, cleared by anything that could
@@ -98,7 +102,7 @@ pub(crate) struct OperatingPoint<'a> {
 /// A held LTI block: its exact transitions, and where its input, its
 /// latched copy (in [`RunState::held_inputs`]) and its states are.
 #[derive(Clone)]
-struct Held {
+pub(super) struct Held {
     zoh: Zoh,
     input: Range<usize>,
     latched: Range<usize>,
@@ -114,7 +118,7 @@ impl Simulator {
         let stop = stop.unwrap_or(model.sim.stop);
         let watch = Watch::new(&model, model.sim.zero_crossing);
         let mut latched = 0;
-        let held = model
+        let held: Vec<Held> = model
             .between
             .held
             .iter()
@@ -144,10 +148,12 @@ impl Simulator {
         let visits = |blocks: &mut dyn Iterator<Item = usize>| Visit::list(&model, blocks.filter(|&i| !plain[i]));
         let minor = visits(&mut model.between.minor.iter().copied());
         let stale = stale_at_start(&model, &minor);
-        let varying =
+        let row_visits =
             visits(&mut (0..n).filter(|&i| model.slots[i].rate == Rate::Continuous && !model.between.event_only[i]));
         let mut state = RunState::new(&model, Clockwork::new(&model, stop), watch);
         state.held_inputs = vec![0.0; latched];
+        let held_zoh = held.iter().map(|h| (h.states.clone(), h.zoh.clone())).collect();
+        state.dense = Dense::new(model.sim.output, state.x.len(), state.clockwork.n_integrated, held_zoh);
         let mut sim = Simulator {
             held,
             integrands,
@@ -159,13 +165,13 @@ impl Simulator {
                 &mut (0..n).filter(|&i| model.slots[i].rate != Rate::Constant && !model.between.event_only[i]),
             ),
             minor,
+            row_visits,
             stale_at_start: stale,
             computed_at: ComputedAt::new(n),
             outputs_current: false,
             state,
             model,
         };
-        sim.state.dense = Dense::new(&sim, sim.model.sim.output, varying);
         sim.reset();
         sim
     }

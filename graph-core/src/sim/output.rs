@@ -6,18 +6,28 @@
 //! outputs held. The solution is the one the major steps give; only the
 //! recorder sees more rows.
 
-use super::visit::Visit;
-use super::{Minor, Simulator};
+use super::{Held, Minor, Simulator};
 use crate::flatten::OutputTimes;
-use ctlgraph_solver::Zoh;
+use ctlgraph_solver::{Integrator, OdeSystem, Zoh};
+use std::ops::Range;
+
+/// What a back-end computes at a row: the solver's system (for the dense
+/// output) that also gives the continuous blocks' outputs at a row's
+/// (t, x) — all states, held LTI blocks' included — as in a minor step.
+pub(crate) trait RowSystem: OdeSystem {
+    /// Where the step (or the solver's part of it) ends: the left-limit
+    /// flag of the evaluations at and past it.
+    fn set_step_end(&mut self, t_end: f64);
+    fn row_outputs(&mut self, t: f64, x: &[f64]);
+    fn signals(&self) -> &[f64];
+    /// Held LTI block `j`'s input, latched at the step's start.
+    fn latched(&self, j: usize) -> &[f64];
+}
 
 /// What the rows inside the last step need.
 #[derive(Clone)]
-pub(super) struct Dense {
+pub(crate) struct Dense {
     times: OutputTimes,
-    /// The continuous blocks a row recomputes (not the plain integrators,
-    /// copied; not event-only blocks, constant between events).
-    visits: Vec<Visit>,
     /// The last step: where it started, where the solver's own step ended
     /// (an event may have ended the major step before), and where the
     /// major step is.
@@ -30,55 +40,62 @@ pub(super) struct Dense {
     x_solver: Vec<f64>,
     /// Work space: the states at a row.
     x_row: Vec<f64>,
-    /// Per held LTI block, its transition over a row's offset into the step.
-    held: Vec<Zoh>,
+    /// Per held LTI block, its states and its transition over a row's
+    /// offset into the step.
+    held: Vec<(Range<usize>, Zoh)>,
     /// `every`: the index k of the next grid time k·DT to record.
     next_k: u64,
 }
 
 impl Dense {
-    pub(super) fn new(sim: &Simulator, times: OutputTimes, visits: Vec<Visit>) -> Option<Self> {
+    /// For `n` states of which `n_integrated` are integrated, and the held
+    /// LTI blocks' states and transitions; `None` when no rows are asked
+    /// between steps.
+    pub(crate) fn new(
+        times: OutputTimes,
+        n: usize,
+        n_integrated: usize,
+        held: Vec<(Range<usize>, Zoh)>,
+    ) -> Option<Self> {
         if times == OutputTimes::Steps {
             return None;
         }
-        let (n, n_integrated) = (sim.state.x.len(), sim.state.clockwork.n_integrated);
         Some(Dense {
             times,
-            visits,
             t0: 0.0,
             t_solver: 0.0,
             t1: 0.0,
             x_start: vec![0.0; n],
             x_solver: vec![0.0; n_integrated],
             x_row: vec![0.0; n],
-            held: sim.held.iter().map(|h| h.zoh.clone()).collect(),
+            held,
             next_k: 0,
         })
     }
 
-    pub(super) fn reset(&mut self) {
+    pub(crate) fn reset(&mut self) {
         self.next_k = 0;
     }
 
     /// At a step's start.
-    pub(super) fn start(&mut self, t0: f64, x: &[f64]) {
+    pub(crate) fn start(&mut self, t0: f64, x: &[f64]) {
         self.t0 = t0;
         self.x_start.copy_from_slice(x);
     }
 
     /// Where the solver's step ended, before an event may cut it short.
-    pub(super) fn solver_end(&mut self, t: f64, x: &[f64]) {
+    pub(crate) fn solver_end(&mut self, t: f64, x: &[f64]) {
         self.t_solver = t;
         self.x_solver.copy_from_slice(x);
     }
 
-    pub(super) fn end(&mut self, t1: f64) {
+    pub(crate) fn end(&mut self, t1: f64) {
         self.t1 = t1;
     }
 
     /// The grid time k·DT (with `every`) that a major step at `t` gives,
     /// if one; for the other modes, `t` itself.
-    pub(super) fn major_row(&mut self, t: f64) -> Option<f64> {
+    pub(crate) fn major_row(&mut self, t: f64) -> Option<f64> {
         let OutputTimes::Every(dt) = self.times else { return Some(t) };
         let g = self.next_k as f64 * dt;
         if (t - g).abs() <= 1e-9 * dt {
@@ -105,6 +122,68 @@ impl Dense {
             }
         }
     }
+
+    /// Hands `sink` the rows inside the step just taken: the integrated
+    /// states from the solver's dense output (`integ`, over `sys`), the
+    /// held ones by their transitions under their latched inputs, the
+    /// outputs by `sys`. Returns false when the sink asked to stop.
+    pub(crate) fn rows(
+        &mut self,
+        integ: &mut Integrator,
+        sys: &mut impl RowSystem,
+        sink: &mut dyn FnMut(f64, &[f64]) -> bool,
+    ) -> bool {
+        let mut go_on = true;
+        let mut row = 0;
+        let n = self.x_solver.len();
+        while let Some(t) = self.next_row(row) {
+            row += 1;
+            sys.set_step_end(self.t_solver);
+            if n > 0 {
+                integ.interpolate(sys, t, &self.x_solver, &mut self.x_row[..n]);
+            }
+            for (j, (states, zoh)) in self.held.iter_mut().enumerate() {
+                self.x_row[states.clone()].copy_from_slice(&self.x_start[states.clone()]);
+                zoh.step(t - self.t0, &mut self.x_row[states.clone()], sys.latched(j));
+            }
+            sys.set_step_end(self.t1);
+            sys.row_outputs(t, &self.x_row);
+            go_on &= sink(t, sys.signals());
+        }
+        go_on
+    }
+}
+
+/// The interpreter's rows: its minor system over the row visits, and the
+/// held blocks' latched inputs.
+struct Rows<'a> {
+    sys: Minor<'a>,
+    held: &'a [Held],
+    inputs: &'a [f64],
+}
+
+impl OdeSystem for Rows<'_> {
+    fn derivatives(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        self.sys.derivatives(t, x, dx);
+    }
+}
+
+impl RowSystem for Rows<'_> {
+    fn set_step_end(&mut self, t_end: f64) {
+        self.sys.t_end = t_end;
+    }
+
+    fn row_outputs(&mut self, t: f64, x: &[f64]) {
+        self.sys.outputs(t, x);
+    }
+
+    fn signals(&self) -> &[f64] {
+        self.sys.signals
+    }
+
+    fn latched(&self, j: usize) -> &[f64] {
+        &self.inputs[self.held[j].latched.clone()]
+    }
 }
 
 impl Simulator {
@@ -118,34 +197,18 @@ impl Simulator {
     fn rows_of_dense_output(&mut self, sink: &mut dyn FnMut(f64, &[f64]) -> bool) -> bool {
         let s = &mut self.state;
         let Some(dense) = &mut s.dense else { return true };
-        let mut go_on = true;
-        let mut row = 0;
-        while let Some(t) = dense.next_row(row) {
-            row += 1;
-            let n = s.clockwork.n_integrated;
-            let mut sys = Minor {
-                model: &self.model,
-                blocks: &mut s.blocks,
-                signals: &mut s.signals,
-                continuous: &dense.visits,
-                at_start: None,
-                stateful: &self.stateful,
-                integrands: &self.integrands,
-                computed_at: &mut self.computed_at,
-                t_end: dense.t_solver,
-            };
-            if n > 0 {
-                s.clockwork.integ.interpolate(&mut sys, t, &dense.x_solver, &mut dense.x_row[..n]);
-            }
-            for (h, zoh) in self.held.iter().zip(&mut dense.held) {
-                let states = h.states.clone();
-                dense.x_row[states.clone()].copy_from_slice(&dense.x_start[states.clone()]);
-                zoh.step(t - dense.t0, &mut dense.x_row[states], &s.held_inputs[h.latched.clone()]);
-            }
-            sys.t_end = dense.t1;
-            sys.outputs(t, &dense.x_row);
-            go_on &= sink(t, &s.signals);
-        }
-        go_on
+        let sys = Minor {
+            model: &self.model,
+            blocks: &mut s.blocks,
+            signals: &mut s.signals,
+            continuous: &self.row_visits,
+            at_start: None,
+            stateful: &self.stateful,
+            integrands: &self.integrands,
+            computed_at: &mut self.computed_at,
+            t_end: 0.0,
+        };
+        let mut rows = Rows { sys, held: &self.held, inputs: &s.held_inputs };
+        dense.rows(&mut s.clockwork.integ, &mut rows, sink)
     }
 }
