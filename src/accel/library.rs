@@ -81,10 +81,6 @@ pub struct AcceleratedRun {
     run: *mut c_void,
 }
 
-// SAFETY: the run is owned by this value alone; the library's runs share
-// no state (a run is the generated step, its blocks and the driver's state).
-unsafe impl Send for AcceleratedRun {}
-
 impl Drop for AcceleratedRun {
     fn drop(&mut self) {
         // SAFETY: `run` came from this library's `create` and is destroyed once.

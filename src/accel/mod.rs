@@ -75,9 +75,10 @@ pub enum Runner {
 
 impl Runner {
     /// The runner `mode` asks for the graph `text` read from `file`,
-    /// compiled (with its overrides' values) into `model`. Under [`Accelerate::On`] a graph
-    /// that cannot be accelerated is interpreted and the second value says
-    /// why; under [`Accelerate::Require`] that reason is the error.
+    /// compiled (with its overrides' values) into `model`. Under
+    /// [`Accelerate::On`] a graph that cannot be accelerated is interpreted
+    /// and the second value says why; under [`Accelerate::Require`] that
+    /// reason is the error.
     pub fn choose(
         mode: Accelerate,
         model: &Model,
