@@ -3,8 +3,8 @@
 //!
 //! ctlgraph generates the step ([`ctlgraph_core::codegen`]), builds it into
 //! a shared library with cargo and the compiler that built ctlgraph
-//! ([`toolchain`]), caches the library by a hash of the code, loads it
-//! ([`library`]) and runs it: the library compiles the graph from the same
+//! (`toolchain.rs`), caches the library by a hash of the code, loads it
+//! (`library.rs`) and runs it: the library compiles the graph from the same
 //! text, overrides and seed, and runs it through the same driver as the
 //! interpreter, so the results are the interpreter's, to the bit. Where it
 //! cannot — no toolchain, another compiler, ctlgraph's source changed — the
