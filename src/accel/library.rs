@@ -102,7 +102,7 @@ impl AcceleratedRun {
 
     pub fn stats(&self) -> RunStats {
         // SAFETY: `run` is live.
-        unsafe { (self.lib.api.stats)(self.run) }.into()
+        unsafe { (self.lib.api.stats)(self.run) }
     }
 
     /// [`ctlgraph_core::Simulator::warnings`], from the library.

@@ -17,7 +17,6 @@
 use super::source;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::time::Instant;
 
 /// The compiler that built this program (`rustc -V`), recorded by `build.rs`.
 pub const RUSTC_VERSION: &str = env!("CTLGRAPH_RUSTC_VERSION");
@@ -65,7 +64,12 @@ pub fn key(code: &str, features: Features) -> String {
 
 /// Where the library for `key` lives in the cache `dir`.
 pub fn library_path(dir: &Path, key: &str) -> PathBuf {
-    dir.join("lib").join(format!("{}{key}{}", std::env::consts::DLL_PREFIX, std::env::consts::DLL_SUFFIX))
+    dir.join("lib").join(dll(key))
+}
+
+/// The file name of a shared library called `stem` on this platform.
+fn dll(stem: &str) -> String {
+    format!("{}{stem}{}", std::env::consts::DLL_PREFIX, std::env::consts::DLL_SUFFIX)
 }
 
 /// Why this machine cannot build a library now, if it cannot: no cargo,
@@ -99,13 +103,11 @@ fn unable() -> Option<String> {
     }
 }
 
-/// Builds the library for `key` from the generated `code` into the cache
-/// `dir`; returns the build's wall time in seconds.
-pub fn build(dir: &Path, key: &str, code: &str, features: Features) -> Result<f64, String> {
+/// Builds the library for `key` from the generated `code` into the cache `dir`.
+pub fn build(dir: &Path, key: &str, code: &str, features: Features) -> Result<(), String> {
     if let Some(why) = unable() {
         return Err(why);
     }
-    let start = Instant::now();
     let krate = dir.join("crates").join(key);
     std::fs::create_dir_all(&krate).map_err(io(&krate))?;
     let name = format!("ctlgraph_step_{key}");
@@ -136,8 +138,7 @@ pub fn build(dir: &Path, key: &str, code: &str, features: Features) -> Result<f6
         let tail = last[last.len().saturating_sub(3)..].join(" / ");
         return Err(format!("cargo could not build the step (in {}): {tail}", krate.display()));
     }
-    let built =
-        target.join("release").join(format!("{}{name}{}", std::env::consts::DLL_PREFIX, std::env::consts::DLL_SUFFIX));
+    let built = target.join("release").join(dll(&name));
     let dest = library_path(dir, key);
     let lib_dir = dest.parent().unwrap_or(dir);
     std::fs::create_dir_all(lib_dir).map_err(io(lib_dir))?;
@@ -146,7 +147,7 @@ pub fn build(dir: &Path, key: &str, code: &str, features: Features) -> Result<f6
     let partial = lib_dir.join(format!(".{key}.{}.partial", std::process::id()));
     std::fs::copy(&built, &partial).map_err(io(&partial))?;
     std::fs::rename(&partial, &dest).map_err(io(&dest))?;
-    Ok(start.elapsed().as_secs_f64())
+    Ok(())
 }
 
 /// The error for a file that cannot be written.

@@ -18,11 +18,12 @@
 
 use super::{Compiled, GeneratedStep};
 use crate::registry::Registry;
+use crate::sim::RunStats;
 use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 /// Bumped whenever [`Api`] or the structs it passes change.
-pub const ABI_VERSION: u32 = 3;
+pub const ABI_VERSION: u32 = 4;
 
 /// The exported function returning the library's [`Api`].
 pub const SYMBOL: &[u8] = b"ctlgraph_accelerated_v1";
@@ -86,50 +87,6 @@ impl TextSink {
 /// for the call only); returns whether the run goes on.
 pub type Sample = unsafe extern "C" fn(ctx: *mut c_void, t: f64, signals: *const f64, len: usize) -> bool;
 
-/// [`crate::RunStats`], flat.
-#[repr(C)]
-#[derive(Clone, Copy, Default)]
-pub struct Stats {
-    pub major_steps: u64,
-    pub steps: u64,
-    pub rejected: u64,
-    pub evaluations: u64,
-    pub jacobians: u64,
-    pub factorizations: u64,
-    pub newton_failures: u64,
-    pub events: u64,
-}
-
-impl From<crate::RunStats> for Stats {
-    fn from(s: crate::RunStats) -> Stats {
-        let v = s.solver;
-        Stats {
-            major_steps: s.major_steps,
-            steps: v.steps,
-            rejected: v.rejected,
-            evaluations: v.evaluations,
-            jacobians: v.jacobians,
-            factorizations: v.factorizations,
-            newton_failures: v.newton_failures,
-            events: s.events,
-        }
-    }
-}
-
-impl From<Stats> for crate::RunStats {
-    fn from(s: Stats) -> crate::RunStats {
-        let solver = ctlgraph_solver::Stats {
-            steps: s.steps,
-            rejected: s.rejected,
-            evaluations: s.evaluations,
-            jacobians: s.jacobians,
-            factorizations: s.factorizations,
-            newton_failures: s.newton_failures,
-        };
-        crate::RunStats { major_steps: s.major_steps, solver, events: s.events }
-    }
-}
-
 /// [`RunWhile`]'s answer: the run reached its stop time.
 pub const FINISHED: i32 = 1;
 /// [`RunWhile`]'s answer: the sink ended the run.
@@ -146,7 +103,7 @@ pub type Reset = unsafe extern "C" fn(run: *mut c_void);
 pub type RunWhile =
     unsafe extern "C" fn(run: *mut c_void, sample: Sample, ctx: *mut c_void, error: *const TextSink) -> i32;
 pub type Time = unsafe extern "C" fn(run: *const c_void) -> f64;
-pub type GetStats = unsafe extern "C" fn(run: *const c_void) -> Stats;
+pub type GetStats = unsafe extern "C" fn(run: *const c_void) -> RunStats;
 /// [`crate::Simulator::warnings`]: `sink` receives each, one call apiece.
 pub type Warnings = unsafe extern "C" fn(run: *const c_void, sink: *const TextSink);
 
@@ -307,9 +264,9 @@ unsafe extern "C" fn time<G: Exported>(run: *const c_void) -> f64 {
     unsafe { &*run.cast::<Compiled<G>>() }.time()
 }
 
-unsafe extern "C" fn stats<G: Exported>(run: *const c_void) -> Stats {
+unsafe extern "C" fn stats<G: Exported>(run: *const c_void) -> RunStats {
     // SAFETY: `run` came from `create::<G>`.
-    unsafe { &*run.cast::<Compiled<G>>() }.stats().into()
+    unsafe { &*run.cast::<Compiled<G>>() }.stats()
 }
 
 unsafe extern "C" fn warnings<G: Exported>(run: *const c_void, sink: *const TextSink) {

@@ -42,7 +42,10 @@ use std::ops::Range;
 use std::sync::Arc;
 use visit::{ComputedAt, Integrand, Visit};
 
-/// Counters for the run report.
+/// Counters for the run report. `repr(C)`, like the solver's: they cross
+/// the C interface of an accelerated run as they are
+/// ([`crate::codegen::export`]).
+#[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RunStats {
     pub major_steps: u64,

@@ -127,7 +127,9 @@ impl Method {
     }
 }
 
-/// Work counters, reported in run reports.
+/// Work counters, reported in run reports. `repr(C)`: an accelerated
+/// run's library hands them to the program as they are.
+#[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Stats {
     /// Accepted steps.
