@@ -2,7 +2,7 @@
 //! drives compiled graphs step by step, at Rust speed, with numpy arrays
 //! back. The package `ctlgraph` (ctlgraph/__init__.py) re-exports it.
 
-use ctlgraph::accel::{Accelerate, Runner};
+use ctlgraph::accel::Runner;
 use ctlgraph::core::checks::CheckResult;
 use ctlgraph::core::trace::Trace;
 use ctlgraph::core::{Diagnostic, Model, Simulator, Snapshot as CoreSnapshot};
@@ -13,6 +13,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
 use std::sync::{Mutex, MutexGuard};
+
+mod accelerate;
+use accelerate::{accelerate_arg, runner};
 
 /// The command line's allocator (see src/main.rs): compiling a graph
 /// allocates per node, and mimalloc makes it ~1.4x faster. Only the
@@ -174,33 +177,6 @@ impl RunResult {
         let samples = self.columns[0].bind(py).len();
         format!("Result({} samples of {})", samples, self.names[1..].join(", "))
     }
-}
-
-/// `accelerate=True | False | "require"` (None: the graph's own setting).
-fn accelerate_arg(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Accelerate>> {
-    let Some(value) = value.filter(|v| !v.is_none()) else { return Ok(None) };
-    if let Ok(b) = value.extract::<bool>() {
-        return Ok(Some(if b { Accelerate::On } else { Accelerate::Off }));
-    }
-    match value.extract::<String>() {
-        Ok(s) if s == "require" => Ok(Some(Accelerate::Require)),
-        _ => Err(PyValueError::new_err("accelerate: True, False or \"require\"")),
-    }
-}
-
-/// The runner `accelerate` asks for the graph `path` compiled into `model`;
-/// a graph that runs interpreted instead says why in a RuntimeWarning.
-fn runner(py: Python<'_>, accelerate: Option<Accelerate>, model: &Model, path: &std::path::Path) -> PyResult<Runner> {
-    let (runner, note) = py.detach(|| ctlgraph::suite::runner_for(accelerate, model, path)).map_err(|e| match e {
-        ctlgraph::suite::Failure::Invalid(d) => graph_error(py, &d),
-        other => SimulationError::new_err(other.to_string()),
-    })?;
-    if let Some(why) = note {
-        let message = std::ffi::CString::new(format!("running interpreted, not accelerated: {why}"))
-            .unwrap_or_else(|_| c"running interpreted, not accelerated".to_owned());
-        PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyRuntimeWarning>(), &message, 1)?;
-    }
-    Ok(runner)
 }
 
 /// Runs `model` (compiled from its graph with `sets` and `seed`) to its
