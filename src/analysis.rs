@@ -150,7 +150,7 @@ pub fn loop_figures(model: ctlgraph_core::Model) -> Result<Vec<f64>, ctlgraph_co
         Err(AnalysisError::Invalid(d)) => return Err(d),
         Err(AnalysisError::Run(_)) => return Ok(vec![f64::NAN; LOOP_FIGURES.len()]),
     };
-    let f = figures(&lin);
+    let f = figures_remembered(&lin);
     let m = &f.margins;
     let mut values = vec![f64::NAN; LOOP_FIGURES.len()];
     for (_, figure, _) in LOOP_FIGURES {
@@ -165,6 +165,38 @@ pub fn loop_figures(model: ctlgraph_core::Model) -> Result<Vec<f64>, ctlgraph_co
         };
     }
     Ok(values)
+}
+
+/// [`figures`] of `lin`, remembered by the linear model's exact bits: the
+/// cases of a sweep, a `prop` run or a suite that differ in a seed or a
+/// value off the loop linearise to the same matrices, and the frequency
+/// responses behind the figures cost several times the run itself (the
+/// 200-seed FLADRC sweep spent 72 % of its time on them). The same bits
+/// give the same figures, so remembering changes no number.
+fn figures_remembered(lin: &Linearization) -> Figures {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    /// Enough for the distinct loops of a sweep over loop parameters to
+    /// stay bounded in memory; a full memo is emptied, not evicted.
+    const KEPT: usize = 256;
+    static MEMO: OnceLock<Mutex<HashMap<Vec<u64>, Figures>>> = OnceLock::new();
+    let ss = &lin.system;
+    let dims = [ss.n, ss.m, ss.p].map(|d| d as u64);
+    let st = lin.sample_time.map_or(u64::MAX, f64::to_bits);
+    let numbers = [&ss.a, &ss.b, &ss.c, &ss.d].into_iter().flatten().map(|v| v.to_bits());
+    let key: Vec<u64> = dims.into_iter().chain([st]).chain(numbers).collect();
+    let memo = MEMO.get_or_init(Default::default);
+    if let Some(f) = memo.lock().ok().and_then(|m| m.get(&key).copied()) {
+        return f;
+    }
+    let f = figures(lin);
+    if let Ok(mut m) = memo.lock() {
+        if m.len() >= KEPT {
+            m.clear();
+        }
+        m.insert(key, f);
+    }
+    f
 }
 
 /// `w` [rad/s], `f` [Hz], magnitude, magnitude in dB, phase in degrees.
