@@ -134,8 +134,7 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
         None => None,
     };
     let keep_trace = opts.plot.is_some() || opts.html.is_some() || !checks.is_empty() || to_stdout;
-    let mut trace =
-        keep_trace.then(|| Trace { loop_figures: sim.model().loop_figures.clone(), ..Trace::new(headers.clone()) });
+    let mut trace = keep_trace.then(|| Trace::for_run(sim.model(), sim.expected_major_steps()));
     let mut recorder = Recorder::new(sim.model());
     let mut progress = Progress::new(sim.stop_time());
     let (max_steps, max_wall) = (opts.max_steps.unwrap_or(u64::MAX), opts.max_wall.unwrap_or(f64::INFINITY));

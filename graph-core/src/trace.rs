@@ -15,20 +15,23 @@ pub fn simulate(model: Model, stop: Option<f64>) -> Result<Trace, SimError> {
 /// [`simulate`], with the run's step, solver and event counts.
 pub fn simulate_with_stats(model: Model, stop: Option<f64>) -> Result<(Trace, RunStats), SimError> {
     let mut sim = Simulator::new(model, stop);
-    let trace = record(sim.shared_model().as_ref(), |sink| sim.run_while(sink))?;
+    let expected = sim.expected_major_steps();
+    let trace = record(sim.shared_model().as_ref(), expected, |sink| sim.run_while(sink))?;
     Ok((trace, sim.stats()))
 }
 
 /// The trace of a run of `model` made by `run`, which hands its sink the
 /// signals at every major step (as [`Simulator::run_while`]): the
 /// recording of [`simulate`] for any back-end.
+/// `expected_steps` ([`Simulator::expected_major_steps`]) sizes the trace
+/// up front.
 pub fn record(
     model: &Model,
+    expected_steps: f64,
     run: impl FnOnce(&mut dyn FnMut(f64, &[f64]) -> bool) -> Result<bool, SimError>,
 ) -> Result<Trace, SimError> {
     let mut recorder = Recorder::new(model);
-    let mut trace = Trace::new(model.headers());
-    trace.loop_figures = model.loop_figures.clone();
+    let mut trace = Trace::for_run(model, expected_steps);
     run(&mut |t, signals| {
         recorder.sample(t, signals, &mut |row| trace.push(row));
         true
@@ -85,6 +88,11 @@ impl Recorder {
     }
 }
 
+/// The most rows [`Trace::for_run`] reserves: beyond, a column grows as
+/// it fills (a run's expected steps are a floor for adaptive methods and a
+/// long run may stop early).
+pub const RESERVED_ROWS: usize = 1 << 22;
+
 /// Recorded signals in memory, column-major.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Trace {
@@ -98,6 +106,19 @@ impl Trace {
     pub fn new(headers: Vec<String>) -> Self {
         let columns = vec![Vec::new(); headers.len()];
         Trace { headers, columns, loop_figures: None }
+    }
+
+    /// The trace of a run of `model` expected to take `expected_steps`
+    /// major steps, its columns sized for them (up to [`RESERVED_ROWS`]):
+    /// growing by doubling would copy every column about once more and
+    /// touch twice the memory, which on long runs costs more than the
+    /// recording itself.
+    pub fn for_run(model: &Model, expected_steps: f64) -> Self {
+        let rows = expected_steps / model.record_every.max(1) as f64 + 2.0;
+        let rows = if rows.is_finite() { (rows as usize).min(RESERVED_ROWS) } else { 0 };
+        let headers = model.headers();
+        let columns = (0..headers.len()).map(|_| Vec::with_capacity(rows)).collect();
+        Trace { headers, columns, loop_figures: model.loop_figures.clone() }
     }
 
     pub fn push(&mut self, row: &[f64]) {

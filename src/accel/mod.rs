@@ -136,7 +136,8 @@ impl Runner {
     ) -> Result<(Trace, RunStats), SimError> {
         match self.start(sets, seed, stop) {
             Ok(Some(mut run)) => {
-                let trace = record(&model, |sink| run.run_while(sink))?;
+                let expected = ctlgraph_core::sim::expected_major_steps(&model, stop);
+                let trace = record(&model, expected, |sink| run.run_while(sink))?;
                 Ok((trace, run.stats()))
             }
             _ => ctlgraph_core::trace::simulate_with_stats(model, stop),

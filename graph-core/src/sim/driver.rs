@@ -95,6 +95,28 @@ impl Clockwork {
         }
     }
 
+    /// About how many major steps the run takes: the fixed-step grid plus
+    /// the sample hits that fall between its points. For the adaptive
+    /// methods a floor: every step is at most `max_step` long and every
+    /// sample hit is a step, so the larger of the two counts (not their
+    /// sum: hits of several clocks and the solver's steps may coincide).
+    pub(crate) fn expected_major_steps(&self) -> f64 {
+        if self.method().is_adaptive() {
+            let hits = |clock: &Clock| ((self.stop - clock.offset) / clock.grid.step).floor().max(0.0);
+            let most_hits = self.clocks.iter().map(hits).fold(0.0, f64::max);
+            return (self.stop / self.method().max_step()).ceil().max(most_hits);
+        }
+        let mut n = self.stop / self.method().max_step();
+        for clock in &self.clocks {
+            let ratio = clock.grid.step / self.grid_step;
+            let on_grid = self.grid_step > 0.0 && ratio >= 0.5 && (ratio - ratio.round()).abs() <= 1e-9 * ratio;
+            if !on_grid {
+                n += (self.stop - clock.offset).max(0.0) / clock.grid.step;
+            }
+        }
+        n.ceil()
+    }
+
     pub(crate) fn method(&self) -> Method {
         self.integ.method()
     }

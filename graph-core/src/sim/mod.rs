@@ -54,6 +54,14 @@ pub struct RunStats {
     pub events: u64,
 }
 
+/// About how many major steps a run of `model` to `stop` (its own stop
+/// time when `None`) takes, without preparing one: as
+/// [`Simulator::expected_major_steps`], for the back-ends that are not a
+/// [`Simulator`] (an accelerated run).
+pub fn expected_major_steps(model: &Model, stop: Option<f64>) -> f64 {
+    driver::Clockwork::new(model, stop.unwrap_or(model.sim.stop)).expected_major_steps()
+}
+
 /// Numbers run states, so a snapshot is restored only where it was taken.
 static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
@@ -233,27 +241,10 @@ impl Simulator {
         &self.state.watch.warnings
     }
 
-    /// About how many major steps the run takes: the fixed-step grid plus
-    /// the sample hits that fall between its points. For the adaptive
-    /// methods a floor: every step is at most `max_step` long and every
-    /// sample hit is a step, so the larger of the two counts (not their
-    /// sum: hits of several clocks and the solver's steps may coincide).
+    /// About how many major steps the run takes
+    /// ([`Clockwork::expected_major_steps`]).
     pub fn expected_major_steps(&self) -> f64 {
-        let c = &self.state.clockwork;
-        if c.method().is_adaptive() {
-            let hits = |clock: &clock::Clock| ((c.stop - clock.offset) / clock.grid.step).floor().max(0.0);
-            let most_hits = c.clocks.iter().map(hits).fold(0.0, f64::max);
-            return (c.stop / c.method().max_step()).ceil().max(most_hits);
-        }
-        let mut n = c.stop / c.method().max_step();
-        for clock in &c.clocks {
-            let ratio = clock.grid.step / c.grid_step;
-            let on_grid = c.grid_step > 0.0 && ratio >= 0.5 && (ratio - ratio.round()).abs() <= 1e-9 * ratio;
-            if !on_grid {
-                n += (c.stop - clock.offset).max(0.0) / clock.grid.step;
-            }
-        }
-        n.ceil()
+        self.state.clockwork.expected_major_steps()
     }
 
     /// Whether the run has reached its stop time.
