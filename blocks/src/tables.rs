@@ -209,6 +209,7 @@ pub(crate) fn read_columns(
         ));
     }
     let mut reader = csv::Reader::from_path(path).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
+    ctlgraph_core::files::note_read(path);
     let headers = reader.headers().map_err(|e| format!("`{shown}`: {e}"))?.clone();
     let find = |name: &str| {
         headers.iter().position(|h| h.trim() == name).ok_or_else(|| {

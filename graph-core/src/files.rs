@@ -2,8 +2,37 @@
 //! /dev/zero or a FIFO never ends, and reading one would exhaust memory or
 //! hang) and, when read whole, only up to a size.
 
+use std::cell::RefCell;
 use std::io::{Error, ErrorKind, Read};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+thread_local! {
+    /// The files read on this thread while [`reading`] runs.
+    static READ: RefCell<Option<Vec<PathBuf>>> = const { RefCell::new(None) };
+}
+
+/// Runs `f` and returns, with its result, the files it read on this thread
+/// ([`read_text`] and those [`note_read`] names: the graph, its subsystem
+/// files, data files) in the order first read, each once — what an FMU
+/// must carry for the graph to load again elsewhere. Loading and compiling
+/// a graph read on the calling thread.
+pub fn reading<T>(f: impl FnOnce() -> T) -> (T, Vec<PathBuf>) {
+    let outer = READ.with(|r| r.borrow_mut().replace(Vec::new()));
+    let value = f();
+    let files = READ.with(|r| std::mem::replace(&mut *r.borrow_mut(), outer)).unwrap_or_default();
+    (value, files)
+}
+
+/// Records that `path` was read, for [`reading`].
+pub fn note_read(path: &Path) {
+    READ.with(|r| {
+        if let Some(files) = r.borrow_mut().as_mut()
+            && !files.iter().any(|f| f == path)
+        {
+            files.push(path.to_path_buf());
+        }
+    });
+}
 
 /// The largest graph file read (a million blocks in flow style are about
 /// 50 MiB).
@@ -30,12 +59,31 @@ pub fn read_text(path: &Path, limit: u64) -> std::io::Result<String> {
     if text.len() as u64 > limit {
         return Err(too_large());
     }
+    note_read(path);
     Ok(text)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn reading_names_each_file_read_once_in_order() {
+        let dir = std::env::temp_dir().join(format!("ctlgraph-reading-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (a, b) = (dir.join("a.yaml"), dir.join("b.csv"));
+        std::fs::write(&a, "x").unwrap();
+        std::fs::write(&b, "y").unwrap();
+        note_read(&b); // outside `reading`: not recorded anywhere
+        let ((), files) = reading(|| {
+            read_text(&a, 10).unwrap();
+            note_read(&b);
+            read_text(&a, 10).unwrap();
+            assert!(read_text(&dir.join("missing"), 10).is_err());
+        });
+        assert_eq!(files, vec![a.clone(), b.clone()]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn devices_folders_and_large_files_are_refused() {

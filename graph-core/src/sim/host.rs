@@ -130,6 +130,15 @@ impl Simulator {
         Ok(&self.state.signals[port.offset..port.offset + port.width])
     }
 
+    /// The whole signal buffer at the present time (outputs computed if
+    /// they are not): for a host that maps its own variables to offsets
+    /// once (an FMU's value references) rather than naming a signal at
+    /// every read.
+    pub fn signals_now(&mut self) -> Result<&[f64], SimError> {
+        self.refresh()?;
+        Ok(&self.state.signals)
+    }
+
     /// The run as it stands, to return to later ([`Simulator::restore`]):
     /// a clone of its [`RunState`], every block's memory included, so take
     /// it at the moments to come back to rather than at every step.
