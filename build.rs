@@ -1,8 +1,9 @@
-//! Records what an accelerated step must be built with to compute what
-//! this program computes (see `src/accel`): the compiler's version and a
-//! hash of the ctlgraph crates' source.
+//! Records what the native libraries (an accelerated step, an FMU binary)
+//! must be built with to compute what this program computes (see
+//! `src/toolchain`): the compiler's version and a hash of the ctlgraph
+//! crates' source.
 
-#[path = "src/accel/source.rs"]
+#[path = "src/toolchain/source.rs"]
 mod source;
 
 fn main() {

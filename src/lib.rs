@@ -13,6 +13,7 @@ pub mod analysis;
 pub mod cache;
 pub mod diagram;
 pub mod dot;
+pub mod fmu;
 pub mod html;
 pub mod plot;
 pub mod prop;
@@ -22,6 +23,7 @@ pub mod report;
 pub mod suite;
 pub mod sweep;
 pub mod sweep_plot;
+pub mod toolchain;
 
 pub use ctlgraph_blocks as blocks;
 pub use ctlgraph_core as core;

@@ -2,6 +2,7 @@
 //! 2 the input is invalid (file, YAML, schema, graph, arguments).
 
 mod analysis_cmd;
+mod fmu_cmd;
 mod interrupt;
 mod progress;
 mod report_cmd;
@@ -169,6 +170,25 @@ enum Command {
         #[arg(long = "set", value_name = "NAME=VALUE")]
         sets: Vec<String>,
     },
+    /// Write the graph as a co-simulation FMU (FMI 3.0, or 2.0) for FMPy, Simulink, Dymola, OpenModelica and other importers.
+    #[command(after_help = "Examples:\n  ctlgraph fmu graphs/tutorial/controller_io.yaml --out controller.fmu\n  \
+                      ctlgraph fmu graphs/fladrc/ladrc.yaml --out ladrc.fmu --fmi 2\n\n\
+                      Inputs are the graph's top-level inports, outputs its outports (without any: its recorded \
+                      signals), parameters its `parameters:` (fixed after initialisation). The FMU's binary runs the \
+                      graph with ctlgraph itself; it is built once with cargo and cached (README, \"As an FMU\").")]
+    Fmu {
+        /// The graph file (YAML).
+        graph: PathBuf,
+        /// The FMU to write.
+        #[arg(long, value_name = "NAME.fmu")]
+        out: PathBuf,
+        /// The FMI version.
+        #[arg(long, value_parser = ["3", "2"], default_value = "3")]
+        fmi: String,
+        /// Override a graph parameter (repeatable): the FMU's parameter starts from it.
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        sets: Vec<String>,
+    },
     /// Print the graph as Graphviz dot.
     #[command(
         after_help = "Example (needs Graphviz):\n  ctlgraph dot graphs/tutorial/pid_loop.yaml | dot -Tsvg > pid_loop.svg"
@@ -270,6 +290,7 @@ fn main() -> ExitCode {
         Command::Bode { select, grid } => analysis_cmd::bode(select, grid),
         Command::Poles { select } => analysis_cmd::poles(select),
         Command::Codegen { graph, out, sets } => codegen(&graph, out.as_deref(), &sets),
+        Command::Fmu { graph, out, fmi, sets } => fmu_cmd::fmu(&graph, &out, &fmi, &sets),
         Command::Dot { graph, sets } => compile(&graph, &sets).map(|m| print!("{}", ctlgraph::dot::to_dot(&m))),
         Command::Diagram { graph, svg, expand, sets } => diagram(&graph, &svg, expand, &sets),
         Command::Report { csv, json, html } => report_cmd::report(&csv, &json, &html),

@@ -21,6 +21,10 @@ fn normalise(line: &str) -> String {
     if let (Some(a), Some(b)) = (l.find(" simulated in "), l.find("x real time)")) {
         l.replace_range(a + " simulated in ".len()..b + "x real time)".len(), "…");
     }
+    // An FMU's size and whether its binary was built depend on the build and the cache.
+    if let Some(a) = l.find(" co-simulation FMU, ").and_then(|_| l.rfind(" (")).filter(|_| l.ends_with(')')) {
+        l.replace_range(a + 2..l.len() - 1, "…");
+    }
     // Whether an accelerated step was built or loaded depends on the cache.
     if let Some(a) = l.find(", accelerated (step ").filter(|_| l.ends_with(')')) {
         l.replace_range(a + ", accelerated (".len()..l.len() - 1, "…");

@@ -3,7 +3,7 @@
 //!
 //! ctlgraph generates the step ([`ctlgraph_core::codegen`]), builds it into
 //! a shared library with cargo and the compiler that built ctlgraph
-//! (`toolchain.rs`), caches the library by a hash of the code, loads it
+//! ([`crate::toolchain`]), caches the library by a hash of the code, loads it
 //! (`library.rs`) and runs it: the library compiles the graph from the same
 //! text, overrides and seed, and runs it through the same driver as the
 //! interpreter, so the results are the interpreter's, to the bit. Where it
@@ -12,9 +12,8 @@
 //! makes that an error.
 
 mod library;
-mod source;
-mod toolchain;
 
+use crate::toolchain;
 pub use ctlgraph_core::Accelerate;
 use ctlgraph_core::trace::{Trace, record};
 use ctlgraph_core::{Model, RunStats, SimError};

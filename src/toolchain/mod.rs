@@ -1,20 +1,23 @@
-//! Building a generated step into a shared library with cargo, and the
-//! cache that keeps the libraries.
+//! Building ctlgraph's native libraries with cargo, and the cache that
+//! keeps them: the step libraries of accelerated runs (`crate::accel`)
+//! and the binaries of FMUs (`ctlgraph fmu`, the `ctlgraph-fmi` crate).
 //!
 //! The cache (`$CTLGRAPH_CACHE_DIR`, else `$XDG_CACHE_HOME/ctlgraph`, else
-//! `~/.cache/ctlgraph`) holds, under `accelerate/`:
-//! - `lib/<key>.so`: one library per step, `key` hashing the generated
-//!   code, ctlgraph's version, the compiler's and the source's hash — a
-//!   graph whose structure is unchanged finds its library there and loads
-//!   it without calling cargo;
-//! - `crates/<key>/`: the crate each library was built from: the generated
-//!   step, a three-line `lib.rs` exporting it, and a manifest depending on
+//! `~/.cache/ctlgraph`) holds, under `libraries/`:
+//! - `lib/<key>.so`: one library per product, `key` hashing what it is
+//!   built from (a step's generated code, or the FMU binary's name),
+//!   ctlgraph's version, the compiler's and the source's hash — a graph
+//!   whose structure is unchanged finds its library there and loads it
+//!   without calling cargo;
+//! - `crates/<key>/`: the crate each library was built from: a short
+//!   `lib.rs` (and a step's generated code), and a manifest depending on
 //!   ctlgraph's crates by path (the source this program was built from);
 //! - `target/`: one cargo target directory for all of them, so ctlgraph's
 //!   crates and their dependencies are compiled once (the first build on a
-//!   machine) and each later graph compiles only its own crate.
+//!   machine) and each later library compiles only its own crate.
 
-use super::source;
+pub mod source;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -25,37 +28,37 @@ const SOURCE_HASH: &str = env!("CTLGRAPH_SOURCE_HASH");
 /// The workspace this program was built from: its crates are the library's.
 const SOURCE_DIR: &str = env!("CARGO_MANIFEST_DIR");
 
-/// The cache's folder for step libraries.
+/// The cache's folder for the libraries ctlgraph builds.
 pub fn cache_dir() -> Result<PathBuf, String> {
     let var = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty()).map(PathBuf::from);
     let base = var("CTLGRAPH_CACHE_DIR")
         .or_else(|| var("XDG_CACHE_HOME").map(|d| d.join("ctlgraph")))
         .or_else(|| var("HOME").map(|d| d.join(".cache").join("ctlgraph")))
         .ok_or("no cache folder: set CTLGRAPH_CACHE_DIR (or XDG_CACHE_HOME or HOME)")?;
-    Ok(base.join("accelerate"))
+    Ok(base.join("libraries"))
 }
 
-/// What a step library is built with besides its code: whether it has
-/// the implicit method (TR-BDF2, over faer), which only a stiff graph's
-/// needs; without it the first build on a machine is much shorter.
+/// What a library is built with besides its code: whether it has the
+/// implicit method (TR-BDF2, over faer), which only a stiff graph needs;
+/// without it the first build on a machine is much shorter.
 #[derive(Clone, Copy)]
 pub struct Features {
     pub implicit: bool,
 }
 
 impl Features {
-    /// The features the library's dependencies are built with, as the
-    /// manifest writes them after `default-features = false`.
-    fn manifest(self) -> &'static str {
-        if self.implicit { ", features = [\"implicit\"]" } else { "" }
+    /// What the key hashes of them.
+    fn tag(self) -> &'static str {
+        if self.implicit { "implicit" } else { "" }
     }
 }
 
-/// The library's name in the cache for the generated `code`.
+/// The library's name in the cache for `code` (a step's generated code,
+/// or what names another product).
 pub fn key(code: &str, features: Features) -> String {
     use sha2::{Digest, Sha256};
     let mut h = Sha256::new();
-    for part in [code, features.manifest(), env!("CARGO_PKG_VERSION"), RUSTC_VERSION, SOURCE_HASH] {
+    for part in [code, features.tag(), env!("CARGO_PKG_VERSION"), RUSTC_VERSION, SOURCE_HASH] {
         h.update(part.as_bytes());
         h.update([0]);
     }
@@ -103,24 +106,55 @@ fn unable() -> Option<String> {
     }
 }
 
-/// Builds the library for `key` from the generated `code` into the cache `dir`.
+/// Builds the step library for `key` from the generated `code` into the cache `dir`.
 pub fn build(dir: &Path, key: &str, code: &str, features: Features) -> Result<(), String> {
+    let name = format!("ctlgraph_step_{key}");
+    let dependencies = format!(
+        "ctlgraph-core = {}\nctlgraph-blocks = {}\n",
+        dependency("graph-core", features, &[]),
+        dependency("blocks", features, &[])
+    );
+    let files = [("lib.rs", STEP_LIB_RS.to_string()), ("step.rs", code.to_string())];
+    build_crate(dir, key, &name, &dependencies, &files)
+}
+
+/// Builds the FMU binary (the `ctlgraph-fmi` crate with its C symbols)
+/// into the cache `dir`, under the key [`fmu_key`] gives.
+pub fn build_fmu(dir: &Path, key: &str, features: Features) -> Result<(), String> {
+    let name = format!("ctlgraph_fmu_{key}");
+    let dependencies = format!("ctlgraph-fmi = {}\n", dependency("fmi", features, &["symbols"]));
+    build_crate(dir, key, &name, &dependencies, &[("lib.rs", FMU_LIB_RS.to_string())])
+}
+
+/// The cache key of the FMU binary built with `features`.
+pub fn fmu_key(features: Features) -> String {
+    key("the FMU binary: the ctlgraph-fmi crate with its symbols", features)
+}
+
+/// A manifest's dependency on the workspace crate in `folder`.
+fn dependency(folder: &str, features: Features, more: &[&str]) -> String {
+    let path = Path::new(SOURCE_DIR).join(folder).display().to_string().replace('\\', "/");
+    let mut list: Vec<String> = more.iter().map(|f| format!("\"{f}\"")).collect();
+    if features.implicit {
+        list.push("\"implicit\"".to_string());
+    }
+    format!("{{ path = \"{path}\", default-features = false, features = [{}] }}", list.join(", "))
+}
+
+/// Builds the crate `name` (its `dependencies` lines and `files`) with
+/// cargo and copies the library into the cache `dir` as `key`.
+fn build_crate(dir: &Path, key: &str, name: &str, dependencies: &str, files: &[(&str, String)]) -> Result<(), String> {
     if let Some(why) = unable() {
         return Err(why);
     }
     let krate = dir.join("crates").join(key);
     std::fs::create_dir_all(&krate).map_err(io(&krate))?;
-    let name = format!("ctlgraph_step_{key}");
     let source = Path::new(SOURCE_DIR);
-    let files = [
-        ("Cargo.toml", manifest(&name, source, features)),
-        ("lib.rs", LIB_RS.to_string()),
-        ("step.rs", code.to_string()),
-    ];
-    for (file, text) in files {
+    let manifest = manifest(name, dependencies);
+    for (file, text) in files.iter().map(|(f, t)| (*f, t.as_str())).chain([("Cargo.toml", manifest.as_str())]) {
         std::fs::write(krate.join(file), text).map_err(io(&krate.join(file)))?;
     }
-    // The versions ctlgraph was built and tested with, so the step's
+    // The versions ctlgraph was built and tested with, so the library's
     // dependencies are those and no index is needed (`--offline`).
     let lock = krate.join("Cargo.lock");
     std::fs::copy(source.join("Cargo.lock"), &lock).map_err(io(&lock))?;
@@ -136,9 +170,9 @@ pub fn build(dir: &Path, key: &str, code: &str, features: Features) -> Result<()
         let stderr = String::from_utf8_lossy(&out.stderr);
         let last: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
         let tail = last[last.len().saturating_sub(3)..].join(" / ");
-        return Err(format!("cargo could not build the step (in {}): {tail}", krate.display()));
+        return Err(format!("cargo could not build the library (in {}): {tail}", krate.display()));
     }
-    let built = target.join("release").join(dll(&name));
+    let built = target.join("release").join(dll(name));
     let dest = library_path(dir, key);
     let lib_dir = dest.parent().unwrap_or(dir);
     std::fs::create_dir_all(lib_dir).map_err(io(lib_dir))?;
@@ -155,26 +189,24 @@ fn io(what: &Path) -> impl FnOnce(std::io::Error) -> String + '_ {
     move |e| format!("cannot write {}: {e}", what.display())
 }
 
-/// The library crate's `lib.rs`: the generated step, exported.
-const LIB_RS: &str = "#[allow(clippy::all, unused)]\nmod step;\n\
-                      ctlgraph_core::export_accelerated!(step::Step, ctlgraph_blocks::registry);\n";
+/// A step library's `lib.rs`: the generated step, exported.
+const STEP_LIB_RS: &str = "#[allow(clippy::all, unused)]\nmod step;\n\
+                           ctlgraph_core::export_accelerated!(step::Step, ctlgraph_blocks::registry);\n";
 
-/// The library crate's manifest. Its own workspace (a cache inside another
+/// The FMU binary's `lib.rs`: the crate whose `symbols` feature exports
+/// the FMI functions, linked in.
+const FMU_LIB_RS: &str = "extern crate ctlgraph_fmi;\n";
+
+/// A library crate's manifest. Its own workspace (a cache inside another
 /// project's folder must not join that workspace); one codegen unit, so
-/// the step's calls into the blocks inline as in a crate of the workspace.
-fn manifest(name: &str, source: &Path, features: Features) -> String {
-    let path = |krate: &str| source.join(krate).display().to_string().replace('\\', "/");
-    let features = features.manifest();
+/// a step's calls into the blocks inline as in a crate of the workspace.
+fn manifest(name: &str, dependencies: &str) -> String {
     format!(
         "[package]\nname = \"{name}\"\nversion = \"0.0.0\"\nedition = \"2024\"\npublish = false\n\n\
          [lib]\npath = \"lib.rs\"\ncrate-type = [\"cdylib\"]\n\n\
-         [dependencies]\n\
-         ctlgraph-core = {{ path = \"{}\", default-features = false{features} }}\n\
-         ctlgraph-blocks = {{ path = \"{}\", default-features = false{features} }}\n\n\
+         [dependencies]\n{dependencies}\n\
          [profile.release]\ndebug = false\n\n\
          [profile.release.package.{name}]\ncodegen-units = 1\n\n\
-         [workspace]\n",
-        path("graph-core"),
-        path("blocks"),
+         [workspace]\n"
     )
 }

@@ -1,17 +1,17 @@
-//! A hash of the ctlgraph source an accelerated step is built from: the
-//! crates it links (solver, graph-core, blocks) and the lock file that
-//! pins their dependencies. The build script records it for the program
+//! A hash of the ctlgraph source the native libraries are built from (an
+//! accelerated step, an FMU binary): the crates they link (solver,
+//! graph-core, blocks, fmi) and the lock file that pins their dependencies. The build script records it for the program
 //! (`CTLGRAPH_SOURCE_HASH`); before building a step, the program hashes
 //! the source again and builds only when it is unchanged — a library built
 //! from other blocks than the program's would compute other numbers.
-//! Shared by `build.rs` (through `#[path]`) and `src/accel`.
+//! Shared by `build.rs` (through `#[path]`) and `src/toolchain`.
 
 use std::path::{Path, PathBuf};
 
 /// The folders and files hashed, relative to the workspace root (the
 /// workspace manifest: the crates take their dependencies' versions and
 /// features from it).
-pub const HASHED: [&str; 8] = [
+pub const HASHED: [&str; 10] = [
     "Cargo.toml",
     "Cargo.lock",
     "solver/Cargo.toml",
@@ -20,6 +20,8 @@ pub const HASHED: [&str; 8] = [
     "graph-core/src",
     "blocks/Cargo.toml",
     "blocks/src",
+    "fmi/Cargo.toml",
+    "fmi/src",
 ];
 
 /// 64-bit FNV-1a over each hashed file's relative path and bytes, in path

@@ -1,0 +1,230 @@
+//! `ctlgraph fmu` as a user runs it: the archive's layout (the graph with
+//! its subsystem and data files, the description, the binary), the real
+//! binary loaded with `libloading` and stepped through its FMI 3 functions
+//! to `ctlgraph run`'s numbers, and the errors. FMPy checks the same FMUs
+//! as an importer (`tests/fmu/test_fmpy.py`, run by `.ci/run`).
+
+mod common;
+use common::{ctlgraph, text};
+use std::ffi::{CStr, CString, c_char, c_void};
+use std::io::Read;
+use std::path::Path;
+
+/// The files of the zip archive at `path`, by name.
+fn unzip(path: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut archive = zip::ZipArchive::new(std::fs::File::open(path).unwrap()).unwrap();
+    (0..archive.len())
+        .map(|i| {
+            let mut f = archive.by_index(i).unwrap();
+            let mut bytes = Vec::new();
+            f.read_to_end(&mut bytes).unwrap();
+            (f.name().unwrap().to_string(), bytes)
+        })
+        .collect()
+}
+
+/// A graph in a folder of its own, with a subsystem file in `lib/` and a
+/// data table in `data/`, as users lay projects out.
+fn project(dir: &Path) -> std::path::PathBuf {
+    std::fs::create_dir_all(dir.join("lib")).unwrap();
+    std::fs::create_dir_all(dir.join("data")).unwrap();
+    std::fs::write(dir.join("data/ref.csv"), "t,r\n0,0\n1,1\n2,1\n").unwrap();
+    std::fs::write(
+        dir.join("lib/lag.yaml"),
+        "parameters: { tau: 1 }\nblocks:\n  u: { type: inport }\n  d: { type: sum, signs: \"+-\" }\n  \
+         g: { type: gain, k: 1/tau }\n  x: { type: integrator }\n  y: { type: outport }\n\
+         wires: [u -> d.u1, x -> d.u2, d -> g, g -> x, x -> y]\n",
+    )
+    .unwrap();
+    let graph = dir.join("main.yaml");
+    std::fs::write(
+        &graph,
+        "name: table into a lag\nparameters: { tau: 0.5 }\nsimulation: { stop: 2, solver: { method: rk4, step: 0.01 } }\n\
+         blocks:\n  r: { type: from_csv, file: data/ref.csv, column: r }\n  \
+         lag: { type: subsystem, file: lib/lag.yaml, parameters: { tau: tau } }\n\
+         wires: [r -> lag]\nrecord: [r, y: lag]\n",
+    )
+    .unwrap();
+    graph
+}
+
+#[test]
+fn an_fmu_carries_the_graph_its_files_and_a_binary_that_steps_it_as_ctlgraph_runs_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let graph = project(&dir.path().join("proj"));
+    let fmu = dir.path().join("lag-table.fmu");
+    let out = ctlgraph(&["fmu", graph.to_str().unwrap(), "--out", fmu.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let summary = text(&out.stdout);
+    assert!(
+        summary.contains("FMI 3.0 co-simulation FMU, 0 inputs, 2 outputs, 1 parameter, 0 local variables"),
+        "{summary}"
+    );
+    let files = unzip(&fmu);
+    let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "modelDescription.xml",
+            "resources/ctlgraph.json",
+            "resources/model/main.yaml",
+            "resources/model/lib/lag.yaml",
+            "resources/model/data/ref.csv",
+            "binaries/x86_64-linux/lag_table.so"
+        ]
+    );
+    let description = text(&files[0].1);
+    assert!(description.contains("modelIdentifier=\"lag_table\""), "{description}");
+    assert!(description.contains("<DefaultExperiment startTime=\"0\" stopTime=\"2\" stepSize=\"0.01\"/>"));
+
+    // The binary, unpacked and loaded as an importer loads it.
+    let unpacked = dir.path().join("unpacked");
+    for (name, bytes) in &files {
+        let path = unpacked.join(name);
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(path, bytes).unwrap();
+    }
+    let reference = dir.path().join("ref.csv");
+    let out = ctlgraph(&["run", graph.to_str().unwrap(), "--out", reference.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let rows: Vec<Vec<f64>> = text(&std::fs::read(&reference).unwrap())
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let token = description.split("instantiationToken=\"").nth(1).unwrap().split('"').next().unwrap();
+    let y = step_through_fmi3(&unpacked, "lag_table", token, 0.1, 20);
+    for (k, value) in y.iter().enumerate() {
+        let row = &rows[(k + 1) * 10];
+        assert!((row[0] - (k + 1) as f64 * 0.1).abs() < 1e-12);
+        assert_eq!(value.to_bits(), row[2].to_bits(), "y at t = {}", row[0]);
+    }
+}
+
+type Instantiate = unsafe extern "C" fn(
+    *const c_char,
+    *const c_char,
+    *const c_char,
+    bool,
+    bool,
+    bool,
+    bool,
+    *const u32,
+    usize,
+    *mut c_void,
+    *const c_void,
+    *const c_void,
+) -> *mut c_void;
+type Init = unsafe extern "C" fn(*mut c_void, bool, f64, f64, bool, f64) -> i32;
+type Exit = unsafe extern "C" fn(*mut c_void) -> i32;
+type DoStep = unsafe extern "C" fn(*mut c_void, f64, f64, bool, *mut bool, *mut bool, *mut bool, *mut f64) -> i32;
+type Get = unsafe extern "C" fn(*mut c_void, *const u32, usize, *mut f64, usize) -> i32;
+type Free = unsafe extern "C" fn(*mut c_void);
+type Version = unsafe extern "C" fn() -> *const c_char;
+
+/// Output 2 (`y`) after each of `n` steps of `h` through the FMU's own
+/// binary, unpacked in `dir`.
+fn step_through_fmi3(dir: &Path, id: &str, token: &str, h: f64, n: usize) -> Vec<f64> {
+    // SAFETY: the FMU's binary, called by the FMI 3 signatures it exports.
+    unsafe {
+        let lib = libloading::Library::new(dir.join(format!("binaries/x86_64-linux/{id}.so"))).unwrap();
+        for name in FMI3_FUNCTIONS.iter().chain(FMI2_FUNCTIONS) {
+            assert!(lib.get::<*const c_void>(name.as_bytes()).is_ok(), "the binary exports no `{name}`");
+        }
+        let version: libloading::Symbol<Version> = lib.get(b"fmi3GetVersion").unwrap();
+        assert_eq!(CStr::from_ptr(version()).to_str().unwrap(), "3.0");
+        let instantiate: libloading::Symbol<Instantiate> = lib.get(b"fmi3InstantiateCoSimulation").unwrap();
+        let init: libloading::Symbol<Init> = lib.get(b"fmi3EnterInitializationMode").unwrap();
+        let exit: libloading::Symbol<Exit> = lib.get(b"fmi3ExitInitializationMode").unwrap();
+        let step: libloading::Symbol<DoStep> = lib.get(b"fmi3DoStep").unwrap();
+        let get: libloading::Symbol<Get> = lib.get(b"fmi3GetFloat64").unwrap();
+        let free: libloading::Symbol<Free> = lib.get(b"fmi3FreeInstance").unwrap();
+        let (name, token) = (CString::new("test").unwrap(), CString::new(token).unwrap());
+        let resources = CString::new(format!("{}/resources/", dir.display())).unwrap();
+        let null = std::ptr::null_mut();
+        let c = instantiate(
+            name.as_ptr(),
+            token.as_ptr(),
+            resources.as_ptr(),
+            false,
+            false,
+            false,
+            false,
+            std::ptr::null(),
+            0,
+            null,
+            std::ptr::null(),
+            std::ptr::null(),
+        );
+        assert!(!c.is_null());
+        assert_eq!(init(c, false, 0.0, 0.0, true, 2.0), 0);
+        assert_eq!(exit(c), 0);
+        let mut out = Vec::new();
+        for k in 0..n {
+            let (mut a, mut b, mut e, mut last) = (false, false, false, 0.0);
+            assert_eq!(step(c, k as f64 * h, h, true, &mut a, &mut b, &mut e, &mut last), 0);
+            let mut y = 0.0;
+            assert_eq!(get(c, [2u32].as_ptr(), 1, &mut y, 1), 0);
+            out.push(y);
+        }
+        free(c);
+        out
+    }
+}
+
+const FMI3_FUNCTIONS: [&str; 12] = [
+    "fmi3GetVersion",
+    "fmi3InstantiateCoSimulation",
+    "fmi3FreeInstance",
+    "fmi3EnterInitializationMode",
+    "fmi3ExitInitializationMode",
+    "fmi3DoStep",
+    "fmi3GetFloat64",
+    "fmi3SetFloat64",
+    "fmi3GetFMUState",
+    "fmi3SerializeFMUState",
+    "fmi3GetContinuousStates",
+    "fmi3ActivateModelPartition",
+];
+const FMI2_FUNCTIONS: &[&str] = &[
+    "fmi2GetVersion",
+    "fmi2Instantiate",
+    "fmi2DoStep",
+    "fmi2GetReal",
+    "fmi2DeSerializeFMUstate",
+    "fmi2GetDerivatives",
+];
+
+#[test]
+fn fmi2_archives_name_their_platform_folder_linux64_and_carry_a_guid() {
+    let dir = tempfile::tempdir().unwrap();
+    let fmu = dir.path().join("ladrc.fmu");
+    let out = ctlgraph(&["fmu", "graphs/fladrc/ladrc.yaml", "--out", fmu.to_str().unwrap(), "--fmi", "2"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("FMI 2.0 co-simulation FMU, 0 inputs, 5 outputs"), "{}", text(&out.stdout));
+    let files = unzip(&fmu);
+    assert!(files.iter().any(|(n, _)| n == "binaries/linux64/ladrc.so"));
+    let description = text(&files[0].1);
+    assert!(description.contains("fmiVersion=\"2.0\"") && description.contains(" guid=\"{"), "{description}");
+}
+
+#[test]
+fn bad_requests_are_refused_with_exit_2_and_no_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let zip = dir.path().join("x.zip");
+    let out = ctlgraph(&["fmu", "graphs/fladrc/ladrc.yaml", "--out", zip.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("an FMU's file name ends in .fmu"), "{}", text(&out.stderr));
+    // A graph error, positioned; a name given to two variables.
+    let bad = dir.path().join("bad.yaml");
+    std::fs::write(&bad, "blocks:\n  g: { type: gian }\n").unwrap();
+    let fmu = dir.path().join("bad.fmu");
+    let out = ctlgraph(&["fmu", bad.to_str().unwrap(), "--out", fmu.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("bad.yaml:2:"), "{}", text(&out.stderr));
+    std::fs::write(&bad, "parameters: { s: 1 }\nblocks:\n  c: { type: constant, value: s }\nrecord: [s: c]\n").unwrap();
+    let out = ctlgraph(&["fmu", bad.to_str().unwrap(), "--out", fmu.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("two variables named `s`"), "{}", text(&out.stderr));
+    assert!(!fmu.exists() && !zip.exists());
+}
