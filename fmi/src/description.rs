@@ -36,7 +36,7 @@ pub fn model_description(model: &Model, variables: &[Variable], id: &Identity, v
         version.text(),
         esc(&name),
         esc(id.token),
-        esc(&format!("ctlgraph graph `{}`", model.file)),
+        esc(&format!("ctlgraph graph `{}`", file_name(&model.file))),
         esc(id.generation_tool),
     );
     if version == Version::Fmi2 {
@@ -100,6 +100,11 @@ pub fn model_description(model: &Model, variables: &[Variable], id: &Identity, v
     }
     x.push_str("  </ModelStructure>\n</fmiModelDescription>\n");
     x
+}
+
+/// The graph file's name, without the folders it was exported from.
+fn file_name(path: &str) -> &str {
+    path.rsplit(['/', '\\']).next().unwrap_or(path)
 }
 
 /// `DefaultExperiment`: the graph's stop time, the fixed step (or the

@@ -10,7 +10,7 @@
 //! the bit.
 
 use crate::config::Config;
-use crate::replay::{Entry, Saved};
+use crate::replay::{Log, Saved};
 use crate::table::{Causality, Place, Variable, Version, variables};
 use ctlgraph_core::{Model, Simulator};
 use std::path::{Path, PathBuf};
@@ -33,7 +33,7 @@ pub(crate) struct Run {
     pub sim: Simulator,
     pub parameters: Vec<f64>,
     pub initial_inputs: Vec<Vec<f64>>,
-    pub log: Vec<Entry>,
+    pub log: Log,
 }
 
 pub struct Instance {
@@ -149,7 +149,7 @@ impl Instance {
             return Err(format!("communication step size {h}: must be a finite number ≥ 0"));
         }
         let to = now + h;
-        run.log.push(Entry::Advance(to));
+        run.log.advance(to);
         if let Err(e) = run.sim.advance_to(to) {
             self.mode = Mode::Failed;
             return Err(format!("the step from t = {now} to {to} failed: {e}"));
@@ -226,7 +226,7 @@ impl Instance {
                     if let Some(run) = self.run.as_mut() {
                         let value = self.inputs[index].clone();
                         run.sim.set_input(&self.input_names[index], &value).map_err(|d| d.to_string())?;
-                        run.log.push(Entry::Input(index, value));
+                        run.log.input(index, value);
                     }
                 }
                 Place::Parameter(i) => {
@@ -257,8 +257,12 @@ impl Instance {
         let stale = self.run.as_ref().is_none_or(|r| r.parameters != self.parameters);
         if stale {
             let sim = self.simulator(&self.parameters)?;
-            let mut run =
-                Run { sim, parameters: self.parameters.clone(), initial_inputs: self.inputs.clone(), log: Vec::new() };
+            let mut run = Run {
+                sim,
+                parameters: self.parameters.clone(),
+                initial_inputs: self.inputs.clone(),
+                log: Log::default(),
+            };
             for (name, value) in self.input_names.iter().zip(&self.inputs) {
                 run.sim.set_input(name, value).map_err(|d| d.to_string())?;
             }
