@@ -290,6 +290,9 @@ fn every_block_of_every_registered_type_keeps_its_promises() {
     let mut graphs: Vec<PathBuf> =
         common::bundled_graphs().into_iter().filter(|g| !g.components().any(|c| c.as_os_str() == "lib")).collect();
     graphs.push(PathBuf::from("tests/data/every_block.yaml"));
+    // The `fmu` block, on a plant `ctlgraph fmu` exports (FMUs are not kept in the repository).
+    let dir = tempfile::tempdir().unwrap();
+    graphs.push(graph_with_an_fmu(dir.path()));
     let (mut broken, mut seen) = (Vec::new(), BTreeSet::new());
     for graph in &graphs {
         let model = ctlgraph::compile_file(graph, &[]).unwrap_or_else(|d| panic!("{}: {d}", graph.display()));
@@ -303,6 +306,21 @@ fn every_block_of_every_registered_type_keeps_its_promises() {
     let structural = ["subsystem", "inport", "outport"];
     let unchecked: Vec<&str> = registry.names().filter(|n| !seen.contains(*n) && !structural.contains(n)).collect();
     assert!(unchecked.is_empty(), "no checked graph has a block of type {unchecked:?}");
+}
+
+/// A graph with an `fmu` block in `dir`, its FMU exported there from
+/// `tests/fmu/plant_io.yaml`; this process unpacks it into the tests' cache.
+fn graph_with_an_fmu(dir: &std::path::Path) -> PathBuf {
+    let fmu = dir.join("plant.fmu");
+    let out = common::ctlgraph(&["fmu", "tests/fmu/plant_io.yaml", "--out", fmu.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", common::text(&out.stderr));
+    ctlgraph::core::files::set_cache_base(common::accelerate_cache());
+    let graph = dir.join("fmu.yaml");
+    let text = "simulation: { stop: 1, solver: { method: rk4, step: 0.01 } }\n\
+                blocks:\n  u: { type: constant, value: [1, 2] }\n  plant: { type: fmu, file: plant.fmu, sample_time: 0.05 }\n\
+                wires: [u -> plant.u]\n";
+    std::fs::write(&graph, text).unwrap();
+    graph
 }
 
 /// The ports of `model`'s blocks that their type's documentation does not

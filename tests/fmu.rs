@@ -228,3 +228,147 @@ fn bad_requests_are_refused_with_exit_2_and_no_file() {
     assert!(text(&out.stderr).contains("two variables named `s`"), "{}", text(&out.stderr));
     assert!(!fmu.exists() && !zip.exists());
 }
+
+// The `fmu` block, on FMUs these tests export from tests/fmu/plant_io.yaml.
+
+/// `tests/fmu/plant_io.yaml` exported as `name` (FMI `version`) into `dir`.
+fn exported_plant(dir: &Path, name: &str, version: &str) -> std::path::PathBuf {
+    let fmu = dir.join(name);
+    let out = ctlgraph(&["fmu", "tests/fmu/plant_io.yaml", "--out", fmu.to_str().unwrap(), "--fmi", version]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    fmu
+}
+
+/// The plant as an FMU block (FMI 3: the vector port `u`; FMI 2: `u_1_`, `u_2_`).
+fn graph_with_fmu(dir: &Path, fmu: &str, version: &str, extra: &str) -> std::path::PathBuf {
+    let (mux, wires, record) = match version {
+        "3" => ("  m: { type: mux }\n", "[src -> m.u1, src2 -> m.u2, m -> plant.u]", "[y: plant.y]"),
+        _ => ("", "[src -> plant.u_1_, src2 -> plant.u_2_]", "[y1: plant.y_1_, y2: plant.y_2_]"),
+    };
+    let graph = dir.join(format!("with_{fmu}.yaml"));
+    std::fs::write(
+        &graph,
+        format!(
+            "name: plant as an FMU\nparameters: {{ g: 3 }}\nsimulation: {{ stop: 5, solver: {{ method: rk4, step: 0.01 }} }}\n\
+             blocks:\n  src: {{ type: sine, amplitude: 1, frequency: 0.5 }}\n  src2: {{ type: step, at: 1.02, value: -1 }}\n\
+             {mux}  plant: {{ type: fmu, file: {fmu}, sample_time: 0.05, parameters: {{ gain: g }}{extra} }}\n\
+             wires: {wires}\nrecord: {record}\n"
+        ),
+    )
+    .unwrap();
+    graph
+}
+
+/// The same plant written in the graph, behind a hold on its input and
+/// one on its output at the FMU block's sample time: what co-simulation
+/// of it means.
+const NATIVE: &str = "name: the plant in the graph, behind holds
+parameters: { gain: 3, tau: 0.5 }
+simulation: { stop: 5, solver: { method: rk4, step: 0.01 } }
+blocks:
+  src:  { type: sine, amplitude: 1, frequency: 0.5 }
+  src2: { type: step, at: 1.02, value: -1 }
+  m:    { type: mux }
+  hold: { type: zero_order_hold, sample_time: 0.05 }
+  k:    { type: gain, k: gain }
+  diff: { type: sum, signs: \"+-\" }
+  rate: { type: gain, k: 1/tau }
+  x:    { type: integrator, initial: [0, 1] }
+  out:  { type: zero_order_hold, sample_time: 0.05 }
+wires: [src -> m.u1, src2 -> m.u2, m -> hold, hold -> k, k -> diff.u1, x -> diff.u2, diff -> rate, rate -> x, x -> out]
+record: [y: out]
+";
+
+/// A run's CSV rows, the header dropped.
+fn rows(graph: &Path, csv: &Path) -> Vec<String> {
+    let out = ctlgraph(&["run", graph.to_str().unwrap(), "--out", csv.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    text(&std::fs::read(csv).unwrap()).lines().skip(1).map(str::to_string).collect()
+}
+
+#[test]
+fn an_fmu_block_co_simulates_an_exported_plant_as_the_graph_runs_it_behind_holds() {
+    let dir = tempfile::tempdir().unwrap();
+    let native = dir.path().join("native.yaml");
+    std::fs::write(&native, NATIVE).unwrap();
+    let expected = rows(&native, &dir.path().join("native.csv"));
+    assert_eq!(expected.len(), 501);
+    for version in ["3", "2"] {
+        exported_plant(dir.path(), &format!("plant{version}.fmu"), version);
+        let graph = graph_with_fmu(dir.path(), &format!("plant{version}.fmu"), version, "");
+        let got = rows(&graph, &dir.path().join(format!("fmu{version}.csv")));
+        // The same numbers, to the bit: the FMU runs the plant with the same
+        // method and step over each communication step, its input held.
+        assert_eq!(got, expected, "FMI {version}");
+    }
+}
+
+#[test]
+fn fmu_block_mistakes_are_positioned_and_named() {
+    let dir = tempfile::tempdir().unwrap();
+    exported_plant(dir.path(), "plant3.fmu", "3");
+    let check = |extra: &str| {
+        let graph = graph_with_fmu(dir.path(), "plant3.fmu", "3", extra);
+        let out = ctlgraph(&["check", graph.to_str().unwrap()]);
+        (out.status.code(), text(&out.stderr), text(&out.stdout))
+    };
+    // `check` lists the FMU's variables.
+    let (code, _, stdout) = check("");
+    assert_eq!(code, Some(0));
+    assert!(stdout.contains("FMU `Two lags` (FMI 3.0, co-simulation)"), "{stdout}");
+    assert!(stdout.contains("u[2]: input Float64, start [0.5, 0.5]"), "{stdout}");
+    // A parameter the FMU does not have: did you mean, at its key.
+    let graph = graph_with_fmu(dir.path(), "plant3.fmu", "3", "");
+    let text_of = std::fs::read_to_string(&graph).unwrap().replace("gain: g", "gian: g");
+    std::fs::write(&graph, &text_of).unwrap();
+    let out = ctlgraph(&["check", graph.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = text(&out.stderr);
+    assert!(
+        err.contains(":8:") && err.contains("no real parameter `gian`") && err.contains("did you mean `gain`?"),
+        "{err}"
+    );
+    // An input it does not have; a missing file; model exchange.
+    let (code, err, _) = check(", inputs: [v]");
+    assert_eq!(code, Some(2));
+    assert!(err.contains("the FMU has no input `v`") && err.contains("did you mean `u`?"), "{err}");
+    let graph = graph_with_fmu(dir.path(), "missing.fmu", "3", "");
+    let out = ctlgraph(&["check", graph.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(text(&out.stderr).contains("missing.fmu`: cannot read"), "{}", text(&out.stderr));
+    let (code, err, _) = check(", mode: me");
+    assert_eq!(code, Some(2));
+    assert!(err.contains("model exchange is not available yet"), "{err}");
+    // An FMU without a binary for this platform.
+    let stripped = dir.path().join("source_only.fmu");
+    let mut writer = zip::ZipWriter::new(std::fs::File::create(&stripped).unwrap());
+    for (name, bytes) in unzip(&dir.path().join("plant3.fmu")).into_iter().filter(|(n, _)| !n.starts_with("binaries/"))
+    {
+        writer.start_file(name, zip::write::SimpleFileOptions::default()).unwrap();
+        std::io::Write::write_all(&mut writer, &bytes).unwrap();
+    }
+    writer.finish().unwrap();
+    let graph = graph_with_fmu(dir.path(), "source_only.fmu", "3", "");
+    let out = ctlgraph(&["check", graph.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).contains("no binary for this platform (x86_64-linux/plant3.so)"),
+        "{}",
+        text(&out.stderr)
+    );
+}
+
+#[test]
+fn an_fmu_that_fails_stops_the_run_naming_the_block_and_what_the_fmu_said() {
+    let dir = tempfile::tempdir().unwrap();
+    exported_plant(dir.path(), "plant3.fmu", "3");
+    // tau = 0 makes the exported graph invalid: its initialisation fails.
+    let graph = graph_with_fmu(dir.path(), "plant3.fmu", "3", "");
+    let with_tau = std::fs::read_to_string(&graph).unwrap().replace("gain: g", "gain: g, tau: 0");
+    std::fs::write(&graph, with_tau).unwrap();
+    let out = ctlgraph(&["run", graph.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    let err = text(&out.stderr);
+    assert!(err.contains("block `plant`") && err.contains("exiting initialisation mode returned error"), "{err}");
+    assert!(err.contains("the FMU said:") && err.contains("plant_io.yaml"), "{err}");
+}

@@ -29,6 +29,7 @@ pub mod delay;
 pub mod discrete;
 pub mod estimation;
 pub mod events;
+pub mod fmu;
 pub mod force;
 pub mod fuzzy;
 pub mod integrator;
@@ -69,6 +70,7 @@ pub fn registry() -> Registry {
         motion::TYPES,
         smc::TYPES,
         estimation::TYPES,
+        fmu::TYPES,
         routing::TYPES,
     ] {
         for ty in family {

@@ -38,6 +38,32 @@ pub fn note_read(path: &Path) {
 /// 50 MiB).
 pub const MAX_GRAPH_FILE: u64 = 512 << 20;
 
+/// The cache folder a program set for itself ([`set_cache_base`]).
+static CACHE_BASE: std::sync::RwLock<Option<PathBuf>> = std::sync::RwLock::new(None);
+
+/// Sets this process's cache folder, over the environment: for a program
+/// (or a test) that must not change its environment while threads run.
+pub fn set_cache_base(dir: PathBuf) {
+    if let Ok(mut base) = CACHE_BASE.write() {
+        *base = Some(dir);
+    }
+}
+
+/// ctlgraph's cache folder: the one [`set_cache_base`] set, else
+/// `$CTLGRAPH_CACHE_DIR`, else `$XDG_CACHE_HOME/ctlgraph`, else
+/// `~/.cache/ctlgraph` — the libraries ctlgraph builds, and the FMUs the
+/// `fmu` block unpacks.
+pub fn cache_base() -> Result<PathBuf, String> {
+    if let Some(dir) = CACHE_BASE.read().ok().and_then(|b| b.clone()) {
+        return Ok(dir);
+    }
+    let var = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty()).map(PathBuf::from);
+    var("CTLGRAPH_CACHE_DIR")
+        .or_else(|| var("XDG_CACHE_HOME").map(|d| d.join("ctlgraph")))
+        .or_else(|| var("HOME").map(|d| d.join(".cache").join("ctlgraph")))
+        .ok_or_else(|| "no cache folder: set CTLGRAPH_CACHE_DIR (or XDG_CACHE_HOME or HOME)".to_string())
+}
+
 /// The size of `path`, an error unless it is a regular file.
 pub fn regular_file(path: &Path) -> std::io::Result<u64> {
     let meta = std::fs::metadata(path)?;

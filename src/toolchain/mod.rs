@@ -30,12 +30,7 @@ const SOURCE_DIR: &str = env!("CARGO_MANIFEST_DIR");
 
 /// The cache's folder for the libraries ctlgraph builds.
 pub fn cache_dir() -> Result<PathBuf, String> {
-    let var = |name: &str| std::env::var_os(name).filter(|v| !v.is_empty()).map(PathBuf::from);
-    let base = var("CTLGRAPH_CACHE_DIR")
-        .or_else(|| var("XDG_CACHE_HOME").map(|d| d.join("ctlgraph")))
-        .or_else(|| var("HOME").map(|d| d.join(".cache").join("ctlgraph")))
-        .ok_or("no cache folder: set CTLGRAPH_CACHE_DIR (or XDG_CACHE_HOME or HOME)")?;
-    Ok(base.join("libraries"))
+    Ok(ctlgraph_core::files::cache_base()?.join("libraries"))
 }
 
 /// What a library is built with besides its code: whether it has the

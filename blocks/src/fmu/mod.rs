@@ -1,0 +1,455 @@
+//! The `fmu` block: a co-simulation FMU (FMI 3.0 or 2.0) inside a graph —
+//! a plant from Modelica, Simulink or any FMI exporter.
+//!
+//! Semantics (as Simulink's FMU block in co-simulation mode): a discrete
+//! block at `sample_time` T. At each hit t_k it outputs the FMU's outputs
+//! at t_k, then (its update) sets the FMU's inputs to their values at t_k
+//! and calls `doStep(t_k, T)`: inputs are held over each step, and the
+//! block has no direct feedthrough (an output at t_k does not see the
+//! input at t_k), so it closes loops without an algebraic loop. The FMU
+//! is instantiated, its parameters set and initialised at the run's start,
+//! one instance per run; a snapshot of the run copies the FMU's state
+//! (FMI's serialised state, where the FMU can give it).
+
+mod archive;
+mod binding;
+mod description;
+
+use crate::table::*;
+use binding::{Binary, Instance};
+use ctlgraph_core::registry::{BlockType, Built};
+use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
+use description::{Causality, Description, Variable};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+pub const TYPES: &[BlockType] = &[BlockType {
+    name: "fmu",
+    category: "co-simulation",
+    summary: "A co-simulation FMU (FMI 3.0 or 2.0): a plant or controller from another tool.",
+    doc: "Loads `file` (an .fmu, relative to the graph), unpacked once into ctlgraph's cache \
+          (`$CTLGRAPH_CACHE_DIR`, …/fmus/<hash>), and runs its binary for this platform. Ports: the \
+          FMU's real inputs and outputs (`Float64`, FMI 2 `Real`), named by the variables (characters \
+          other than letters, digits and _ become _), arrays as vectors; `inputs`/`outputs` select and \
+          order them. `parameters` sets the FMU's parameters before initialisation (values may be \
+          expressions of the graph's parameters). Co-simulation (Simulink's FMU block): at each hit \
+          t_k of `sample_time` (default: the FMU's DefaultExperiment stepSize) the outputs are the \
+          FMU's at t_k; then the inputs at t_k are set and doStep(t_k, T) runs, inputs held over the \
+          step — no direct feedthrough. A discarded step, an early return or an error status stops the \
+          run, naming the block, with what the FMU logged. `ctlgraph check` lists the FMU's variables.",
+    inputs: &[PortDoc { name: "(the FMU's inputs)", doc: "one port per selected input variable" }],
+    outputs: &[PortDoc { name: "(the FMU's outputs)", doc: "one port per selected output variable" }],
+    params: &[
+        param("file", Required, "the FMU, relative to the graph file"),
+        param("mode", Word("cs"), "cs: co-simulation (the FMU's own solver between hits)"),
+        param(
+            "sample_time",
+            Described("the FMU's DefaultExperiment stepSize"),
+            "T > 0, or [T, offset]: the communication step",
+        )
+        .kind(ParamKind::SampleTime),
+        param("parameters", Described("none"), "{ name: value, … }: the FMU's parameters, set before initialisation")
+            .kind(ParamKind::Structure),
+        param("inputs", Described("every real input"), "the FMU's inputs to connect, in port order")
+            .kind(ParamKind::Words),
+        param("outputs", Described("every real output"), "the FMU's outputs to connect, in port order")
+            .kind(ParamKind::Words),
+    ],
+    build: build_fmu,
+}];
+
+use ctlgraph_core::registry::PortDoc;
+
+/// An FMU loaded for the blocks that use it: its binary, description and
+/// resources.
+struct Loaded {
+    binary: Arc<Binary>,
+    description: Description,
+    resources: PathBuf,
+}
+
+/// A selected port: its name, the variable's value reference and size
+/// (an FMI 3 array is one reference for all its elements).
+struct Port {
+    name: String,
+    reference: u32,
+    size: usize,
+}
+
+fn build_fmu(p: &mut Params) -> Result<Built, Diagnostic> {
+    let path = p.path("file")?;
+    if p.choice("mode", &["cs", "me"])? == "me" {
+        return Err(p
+            .error("mode", "model exchange is not available yet: use `mode: cs` (the FMU's own solver between hits)")
+            .with_hint("an FMU exported for co-simulation runs as `mode: cs`"));
+    }
+    let loaded = load(&path).map_err(|e| p.error("file", format!("`{}`: {e}", path.display())))?;
+    let d = &loaded.description;
+    let cs = d.co_simulation.as_ref().ok_or_else(|| {
+        p.error("file", format!("`{}` has no co-simulation interface (it is for model exchange only)", path.display()))
+    })?;
+    let (st, period, offset) = if p.has("sample_time") {
+        p.discrete_clock()?
+    } else {
+        let step = d
+            .default_step
+            .ok_or_else(|| p.block_error("the FMU gives no DefaultExperiment stepSize: set `sample_time: T`"))?;
+        (ctlgraph_core::SampleTime::Discrete { period: step, offset: 0.0 }, step, 0.0)
+    };
+    let inputs = select(p, d, "inputs", Causality::Input)?;
+    let outputs = select(p, d, "outputs", Causality::Output)?;
+    let parameters = parameters(p, d)?;
+    let mut iface = Interface::new(st);
+    for port in &inputs {
+        iface = iface.input(&port.name, Width::Fixed(port.size), false);
+    }
+    for port in &outputs {
+        iface = iface.output(&port.name, Width::Fixed(port.size));
+    }
+    let report = report(d, &path, period);
+    let block = FmuBlock {
+        name: p.block_name().to_string(),
+        token: d.token.clone(),
+        can_copy_state: cs.can_get_and_set_state && cs.can_serialize_state,
+        loaded: Arc::new(loaded),
+        input_refs: inputs.iter().map(|p| p.reference).collect(),
+        input_len: inputs.iter().map(|p| p.size).sum(),
+        output_refs: outputs.iter().map(|p| p.reference).collect(),
+        output_len: outputs.iter().map(|p| p.size).sum(),
+        parameters,
+        period,
+        offset,
+        report,
+        run: None,
+    };
+    Ok(Built::new(block, iface.piecewise_constant()))
+}
+
+/// The FMU at `path`, unpacked, described and its binary loaded.
+fn load(path: &std::path::Path) -> Result<Loaded, String> {
+    let dir = archive::unpacked(path)?;
+    let text =
+        std::fs::read_to_string(dir.join("modelDescription.xml")).map_err(|e| format!("modelDescription.xml: {e}"))?;
+    let description = description::parse(&text)?;
+    let cs = description.co_simulation.as_ref().ok_or("no co-simulation interface")?;
+    let folder = match description.version {
+        description::Version::Fmi3 => "x86_64-linux",
+        description::Version::Fmi2 => "linux64",
+    };
+    let binary_path = dir.join("binaries").join(folder).join(format!("{}.so", cs.model_identifier));
+    if !binary_path.is_file() {
+        let platforms: Vec<String> = std::fs::read_dir(dir.join("binaries"))
+            .map(|r| r.filter_map(|e| e.ok()).map(|e| e.file_name().to_string_lossy().into_owned()).collect())
+            .unwrap_or_default();
+        return Err(format!(
+            "no binary for this platform ({folder}/{}.so); the FMU has binaries for: {}",
+            cs.model_identifier,
+            if platforms.is_empty() { "none (a source-only FMU)".to_string() } else { platforms.join(", ") }
+        ));
+    }
+    let with_state = cs.can_get_and_set_state && cs.can_serialize_state;
+    let binary = Binary::load(&binary_path, description.version, with_state)?;
+    Ok(Loaded { binary, description, resources: dir.join("resources") })
+}
+
+/// A port name from a variable name: letters, digits and _ kept.
+fn port_name(variable: &str) -> String {
+    variable.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect()
+}
+
+/// The ports `key` selects (all the real variables of `causality` when not given).
+fn select(p: &mut Params, d: &Description, key: &str, causality: Causality) -> Result<Vec<Port>, Diagnostic> {
+    let candidates: Vec<&Variable> = d.variables.iter().filter(|v| v.causality == causality).collect();
+    let chosen: Vec<&Variable> = if p.has(key) {
+        let mut chosen = Vec::new();
+        for name in p.strings(key)? {
+            let Some(v) = candidates.iter().find(|v| v.name == name || port_name(&v.name) == name) else {
+                let names: Vec<&str> = candidates.iter().map(|v| v.name.as_str()).collect();
+                return Err(p
+                    .error(key, format!("the FMU has no {} `{name}`", causality.name()))
+                    .suggest(name, names.iter().copied())
+                    .or_hint(format!(
+                        "its {}s: {}",
+                        causality.name(),
+                        if names.is_empty() { "none".into() } else { names.join(", ") }
+                    )));
+            };
+            if !v.is_real() {
+                return Err(
+                    p.error(key, format!("`{name}` is {}: the block connects real variables only", v.type_name))
+                );
+            }
+            chosen.push(*v);
+        }
+        chosen
+    } else {
+        candidates.into_iter().filter(|v| v.is_real()).collect()
+    };
+    let mut ports: Vec<Port> = Vec::new();
+    for v in chosen {
+        let name = port_name(&v.name);
+        if ports.iter().any(|q| q.name == name) {
+            return Err(p.error(key, format!("two of the FMU's {}s are the port `{name}`", causality.name())));
+        }
+        ports.push(Port { name, reference: v.value_reference, size: v.size });
+    }
+    Ok(ports)
+}
+
+/// `parameters:`: each name the FMU's (a did-you-mean otherwise), each
+/// value a number, expression or list (an array).
+fn parameters(p: &mut Params, d: &Description) -> Result<Vec<(u32, Vec<f64>)>, Diagnostic> {
+    let Some(map) = p.raw("parameters") else { return Ok(Vec::new()) };
+    let entries = map.expect_map("`parameters`")?;
+    let settable = |v: &&Variable| matches!(v.causality, Causality::Parameter | Causality::Input) && v.is_real();
+    let names: Vec<&str> = d.variables.iter().filter(settable).map(|v| v.name.as_str()).collect();
+    let mut out = Vec::new();
+    for (key, value) in entries {
+        let Some(v) = d.variables.iter().filter(settable).find(|v| v.name == key.name) else {
+            let kind = d.variables.iter().find(|v| v.name == key.name).map(|v| {
+                format!(
+                    " (it is {} {} of type {})",
+                    if v.causality == Causality::Input { "an" } else { "a" },
+                    v.causality.name(),
+                    v.type_name
+                )
+            });
+            return Err(Diagnostic::at(
+                &key.pos,
+                format!(
+                    "block `{}` (fmu): the FMU has no real parameter `{}`{}",
+                    p.block_name(),
+                    key.name,
+                    kind.unwrap_or_default()
+                ),
+            )
+            .suggest(&key.name, names.iter().copied())
+            .or_hint(format!("its parameters: {}", names.join(", "))));
+        };
+        let values = match &value.kind {
+            ctlgraph_core::yaml::Kind::Seq(items) => {
+                items.iter().map(|item| p.number_value("parameters", item)).collect::<Result<Vec<_>, _>>()?
+            }
+            _ => vec![p.number_value("parameters", value)?],
+        };
+        if values.len() != v.size {
+            return Err(Diagnostic::at(
+                &value.pos,
+                format!(
+                    "block `{}` (fmu): parameter `{}` holds {} value(s), given {}",
+                    p.block_name(),
+                    v.name,
+                    v.size,
+                    values.len()
+                ),
+            ));
+        }
+        out.push((v.value_reference, values));
+    }
+    Ok(out)
+}
+
+/// What `ctlgraph check` prints: the FMU and its variables.
+fn report(d: &Description, path: &std::path::Path, period: f64) -> String {
+    let version = match d.version {
+        description::Version::Fmi3 => "3.0",
+        description::Version::Fmi2 => "2.0",
+    };
+    let mut lines = vec![format!(
+        "FMU `{}` (FMI {version}, co-simulation), `{}`, step {period} s; variables:",
+        d.model_name,
+        path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default()
+    )];
+    for v in d.variables.iter().filter(|v| v.causality != Causality::Local) {
+        let size = if v.size > 1 { format!("[{}]", v.size) } else { String::new() };
+        let unit = v.unit.as_ref().map(|u| format!(" [{u}]")).unwrap_or_default();
+        let start = v.start.as_ref().map(|s| format!(", start {s:?}")).unwrap_or_default();
+        lines.push(format!("    {}{size}: {} {}{unit}{start}", v.name, v.causality.name(), v.type_name));
+    }
+    lines.join("\n")
+}
+
+/// The block: the FMU (shared), the selected variables, and this run's
+/// instance.
+pub struct FmuBlock {
+    name: String,
+    token: String,
+    can_copy_state: bool,
+    loaded: Arc<Loaded>,
+    /// The selected variables' value references, and how many numbers they hold.
+    input_refs: Vec<u32>,
+    input_len: usize,
+    output_refs: Vec<u32>,
+    output_len: usize,
+    parameters: Vec<(u32, Vec<f64>)>,
+    period: f64,
+    offset: f64,
+    report: String,
+    /// The run's instance, once initialised; `None` in the compiled model.
+    run: Option<Run>,
+}
+
+/// One run's FMU instance and where it is.
+struct Run {
+    /// The instance, or why there is none (and the run must stop).
+    instance: Result<Instance, String>,
+    /// The communication steps taken: the FMU is at offset + steps·T.
+    steps: u64,
+    /// A copy's FMU state, applied when the copy is first used.
+    pending: Option<Vec<u8>>,
+    /// The values exchanged at a hit (allocated once, with the run).
+    inputs: Vec<f64>,
+    outputs: Vec<f64>,
+}
+
+/// A copy's instance before its first use (never seen: `ready` makes it).
+const NOT_YET_RESTORED: &str = "a copy's instance, not yet restored";
+
+impl Clone for FmuBlock {
+    /// A copy with its own FMU instance: for a snapshot of a run, the FMU's
+    /// state serialised now and restored into a new instance when the copy
+    /// is first used.
+    fn clone(&self) -> Self {
+        let run = self.run.as_ref().map(|r| {
+            let pending = match (&r.instance, &r.pending) {
+                // A copy not yet used: its state, again.
+                (_, Some(bytes)) => Ok(bytes.clone()),
+                (Ok(i), None) if self.can_copy_state => i.serialize(),
+                (Ok(_), None) => Err("the FMU cannot save and restore its state (canSerializeFMUState is false): \
+                                     a snapshot of this run cannot copy it"
+                    .to_string()),
+                (Err(e), None) => Err(e.clone()),
+            };
+            let (instance, pending) = match pending {
+                Ok(bytes) => (Err(NOT_YET_RESTORED.to_string()), Some(bytes)),
+                Err(e) => (Err(e), None),
+            };
+            Run { instance, steps: r.steps, pending, inputs: r.inputs.clone(), outputs: r.outputs.clone() }
+        });
+        FmuBlock {
+            name: self.name.clone(),
+            token: self.token.clone(),
+            can_copy_state: self.can_copy_state,
+            loaded: self.loaded.clone(),
+            input_refs: self.input_refs.clone(),
+            input_len: self.input_len,
+            output_refs: self.output_refs.clone(),
+            output_len: self.output_len,
+            parameters: self.parameters.clone(),
+            period: self.period,
+            offset: self.offset,
+            report: self.report.clone(),
+            run,
+        }
+    }
+}
+
+impl FmuBlock {
+    /// A new instance, its parameters set and initialised.
+    fn instantiate(&self) -> Result<Instance, String> {
+        let mut i = Instance::new(&self.loaded.binary, &self.name, &self.token, &self.loaded.resources)?;
+        i.enter_initialization(self.offset)?;
+        for (reference, values) in &self.parameters {
+            i.set(&[*reference], values)?;
+        }
+        i.exit_initialization()?;
+        Ok(i)
+    }
+
+    /// Makes the run's instance ready: a copy's made and its state
+    /// restored on first use.
+    fn ready(&mut self) -> Result<(), String> {
+        let pending = match self.run.as_mut() {
+            None => return Err("the block was not initialised (internal error)".to_string()),
+            Some(r) => r.pending.take(),
+        };
+        if let Some(bytes) = pending {
+            let made = self.instantiate().and_then(|mut i| i.deserialize(&bytes).map(|()| i));
+            if let Some(r) = self.run.as_mut() {
+                r.instance = made;
+            }
+        }
+        match self.run.as_ref().map(|r| &r.instance) {
+            Some(Ok(_)) => Ok(()),
+            Some(Err(e)) => Err(e.clone()),
+            None => Err("no run".to_string()),
+        }
+    }
+}
+
+impl Block for FmuBlock {
+    fn initialize(&mut self, _x0: &mut [f64]) {
+        self.run = None; // the previous instance is freed first
+        let instance = self.instantiate();
+        let (inputs, outputs) = (vec![0.0; self.input_len], vec![0.0; self.output_len]);
+        self.run = Some(Run { instance, steps: 0, pending: None, inputs, outputs });
+    }
+
+    /// The FMU's outputs at this hit (NaN once it failed).
+    fn output(&mut self, io: &mut Io) {
+        let got = self.ready().and_then(|()| match self.run.as_mut() {
+            Some(Run { instance: Ok(i), outputs, .. }) => i.get(&self.output_refs, outputs),
+            _ => Err("no instance".to_string()),
+        });
+        if let Err(e) = got {
+            self.fail(e);
+        }
+        let Some(run) = self.run.as_ref() else { return };
+        let mut k = 0;
+        for port in 0..io.num_outputs() {
+            for j in 0..io.output_width(port) {
+                let v = if run.instance.is_ok() { run.outputs[k] } else { f64::NAN };
+                io.set_at(port, j, v);
+                k += 1;
+            }
+        }
+    }
+
+    /// The inputs at this hit set, and one communication step from
+    /// offset + k·T (counted, not accumulated).
+    fn update(&mut self, io: &mut Io) {
+        if let Err(e) = self.ready() {
+            self.fail(e);
+            return;
+        }
+        let (period, offset) = (self.period, self.offset);
+        let Some(Run { instance: Ok(i), inputs, steps, .. }) = self.run.as_mut() else { return };
+        let mut k = 0;
+        for port in 0..io.num_inputs() {
+            let u = io.input(port);
+            inputs[k..k + u.len()].copy_from_slice(u);
+            k += u.len();
+        }
+        let t = offset + *steps as f64 * period;
+        match i.set(&self.input_refs, inputs).and_then(|()| i.do_step(t, period)) {
+            Ok(()) => *steps += 1,
+            Err(e) => self.fail(e),
+        }
+    }
+
+    fn diagnose(&self) -> Option<String> {
+        match self.run.as_ref().map(|r| &r.instance) {
+            Some(Err(e)) => Some(format!("the FMU: {e}")),
+            _ => None,
+        }
+    }
+
+    fn not_linearizable(&self) -> Option<&'static str> {
+        Some("an FMU in co-simulation is a black box stepped at its sample time")
+    }
+
+    fn build_report(&self) -> Option<String> {
+        Some(self.report.clone())
+    }
+}
+
+impl FmuBlock {
+    /// Ends the instance with `error`: its outputs are NaN from now on, and
+    /// the run stops at them naming the block with this message.
+    fn fail(&mut self, error: String) {
+        if let Some(r) = self.run.as_mut() {
+            r.instance = Err(error);
+            r.pending = None;
+        }
+    }
+}
