@@ -315,7 +315,7 @@ fn fmu_block_mistakes_are_positioned_and_named() {
     // `check` lists the FMU's variables.
     let (code, _, stdout) = check("");
     assert_eq!(code, Some(0));
-    assert!(stdout.contains("FMU `Two lags` (FMI 3.0, co-simulation)"), "{stdout}");
+    assert!(stdout.contains("FMU `Two lags` (FMI 3.0, co-simulation, step 0.05 s)"), "{stdout}");
     assert!(stdout.contains("u[2]: input Float64, start [0.5, 0.5]"), "{stdout}");
     // A parameter the FMU does not have: did you mean, at its key.
     let graph = graph_with_fmu(dir.path(), "plant3.fmu", "3", "");
@@ -328,7 +328,7 @@ fn fmu_block_mistakes_are_positioned_and_named() {
         err.contains(":8:") && err.contains("no real parameter `gian`") && err.contains("did you mean `gain`?"),
         "{err}"
     );
-    // An input it does not have; a missing file; model exchange.
+    // An input it does not have; a missing file; model exchange of a co-simulation FMU.
     let (code, err, _) = check(", inputs: [v]");
     assert_eq!(code, Some(2));
     assert!(err.contains("the FMU has no input `v`") && err.contains("did you mean `u`?"), "{err}");
@@ -338,7 +338,7 @@ fn fmu_block_mistakes_are_positioned_and_named() {
     assert!(text(&out.stderr).contains("missing.fmu`: cannot read"), "{}", text(&out.stderr));
     let (code, err, _) = check(", mode: me");
     assert_eq!(code, Some(2));
-    assert!(err.contains("model exchange is not available yet"), "{err}");
+    assert!(err.contains("no model-exchange interface (for co-simulation: `mode: cs`)"), "{err}");
     // An FMU without a binary for this platform.
     let stripped = dir.path().join("source_only.fmu");
     let mut writer = zip::ZipWriter::new(std::fs::File::create(&stripped).unwrap());
@@ -371,4 +371,125 @@ fn an_fmu_that_fails_stops_the_run_naming_the_block_and_what_the_fmu_said() {
     let err = text(&out.stderr);
     assert!(err.contains("block `plant`") && err.contains("exiting initialisation mode returned error"), "{err}");
     assert!(err.contains("the FMU said:") && err.contains("plant_io.yaml"), "{err}");
+}
+
+// `mode: me`, on a model-exchange FMU these tests build from C
+// (tests/fmu/bouncing_ball_me.c) with the system's C compiler.
+
+/// The bouncing ball FMU for FMI `version`, compiled and packed in `dir`.
+fn built_ball(dir: &Path, version: &str) -> std::path::PathBuf {
+    let (platform, xml) = match version {
+        "3" => ("x86_64-linux", "tests/fmu/bouncing_ball_me.xml"),
+        _ => ("linux64", "tests/fmu/bouncing_ball_me2.xml"),
+    };
+    let so = dir.join(format!("bouncing_ball{version}.so"));
+    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".to_string());
+    let out = std::process::Command::new(&cc)
+        .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-shared", "-fPIC", "-O2", "-o"])
+        .arg(&so)
+        .arg("tests/fmu/bouncing_ball_me.c")
+        .output()
+        .unwrap_or_else(|e| panic!("the C compiler `{cc}`: {e}"));
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let fmu = dir.join(format!("ball{version}.fmu"));
+    let mut writer = zip::ZipWriter::new(std::fs::File::create(&fmu).unwrap());
+    let options = zip::write::SimpleFileOptions::default();
+    for (name, bytes) in [
+        ("modelDescription.xml".to_string(), std::fs::read(xml).unwrap()),
+        (format!("binaries/{platform}/bouncing_ball.so"), std::fs::read(&so).unwrap()),
+    ] {
+        writer.start_file(name, options).unwrap();
+        std::io::Write::write_all(&mut writer, &bytes).unwrap();
+    }
+    writer.finish().unwrap();
+    fmu
+}
+
+/// A graph running `fmu` in model exchange under `solver`, with `parameters`.
+fn ball_graph(dir: &Path, fmu: &str, solver: &str, parameters: &str) -> std::path::PathBuf {
+    let graph = dir.join(format!("{}.yaml", fmu.replace('.', "_")));
+    std::fs::write(
+        &graph,
+        format!(
+            "name: a ball as an FMU\nsimulation: {{ stop: 10, solver: {solver} }}\nblocks:\n  a: {{ type: constant, value: 0 }}\n  \
+             ball: {{ type: fmu, file: {fmu}, mode: me, parameters: {{ {parameters} }} }}\n\
+             wires: [a -> ball.a]\nrecord: [h: ball.h, v: ball.v]\n"
+        ),
+    )
+    .unwrap();
+    graph
+}
+
+/// Rows (t, h, v) of a run.
+fn ball_rows(graph: &Path) -> Vec<[f64; 3]> {
+    let csv = graph.with_extension("csv");
+    rows(graph, &csv)
+        .iter()
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect()
+}
+
+const DOPRI: &str = "{ method: dopri5, rtol: 1.0e-10, atol: 1.0e-12, max_step: 0.05 }";
+
+/// The times v turns from falling to rising: the located impacts.
+fn impacts(rows: &[[f64; 3]]) -> Vec<f64> {
+    rows.windows(2).filter(|w| w[0][2] < 0.0 && w[1][2] > 0.0).map(|w| w[1][0]).collect()
+}
+
+#[test]
+fn a_model_exchange_fmu_bounces_where_the_closed_form_says_its_states_in_ctlgraphs_solver() {
+    let dir = tempfile::tempdir().unwrap();
+    let (g, e, h0) = (9.81f64, 0.8f64, 10.0f64);
+    // Impacts: t1 = √(2 h0 / g), then each flight 2 eᵏ v1 / g with v1 = g t1.
+    let t1 = (2.0 * h0 / g).sqrt();
+    let closed: Vec<f64> = (0..4)
+        .scan(t1, |t, k| {
+            let now = *t;
+            *t += 2.0 * e.powi(k + 1) * g * t1 / g;
+            Some(now)
+        })
+        .collect();
+    let mut by_version = Vec::new();
+    for version in ["3", "2"] {
+        built_ball(dir.path(), version);
+        let graph = ball_graph(dir.path(), &format!("ball{version}.fmu"), DOPRI, "e: 0.8");
+        let rows = ball_rows(&graph);
+        let found = impacts(&rows);
+        assert!(found.len() >= 4, "FMI {version}: impacts {found:?}");
+        for (t, want) in found.iter().zip(&closed) {
+            assert!((t - want).abs() < 1e-8, "FMI {version}: an impact at {t}, the closed form {want}");
+        }
+        assert!(rows.iter().all(|r| r[1] > -1e-9), "FMI {version}: the floor holds");
+        // Right after the first impact, v = e·v1 (the FMU's event reset, taken into the solver's state).
+        let rebound = rows.iter().find(|r| r[0] == found[0]).unwrap()[2];
+        assert!((rebound - e * g * t1).abs() < 1e-7, "FMI {version}: rebound at {rebound}");
+        by_version.push(rows);
+    }
+    // One C model behind both interfaces: the same numbers.
+    assert_eq!(by_version[0], by_version[1]);
+    // The same FMU under TR-BDF2 (its Jacobian by finite differences).
+    let graph = ball_graph(
+        dir.path(),
+        "ball3.fmu",
+        "{ method: trbdf2, rtol: 1.0e-8, atol: 1.0e-10, max_step: 0.05 }",
+        "e: 0.8",
+    );
+    let first = impacts(&ball_rows(&graph))[0];
+    assert!((first - closed[0]).abs() < 1e-6, "TR-BDF2: the first impact at {first}");
+}
+
+#[test]
+fn a_model_exchange_fmus_time_event_is_a_major_step_and_its_state_jump_is_taken() {
+    let dir = tempfile::tempdir().unwrap();
+    built_ball(dir.path(), "3");
+    // At t = 0.5 the FMU adds 3 m/s to v (a time event it schedules).
+    let graph = ball_graph(dir.path(), "ball3.fmu", DOPRI, "kick: 3, t_kick: 0.5");
+    let rows = ball_rows(&graph);
+    let at = rows.iter().position(|r| r[0] == 0.5).expect("a major step exactly at the time event");
+    let (before, after) = (rows[at - 1], rows[at]);
+    assert!((after[2] - (-9.81 * 0.5 + 3.0)).abs() < 1e-9, "v after the kick: {after:?} (before {before:?})");
+    assert!((after[1] - (10.0 - 0.5 * 9.81 * 0.25)).abs() < 1e-9, "h is continuous: {after:?}");
 }

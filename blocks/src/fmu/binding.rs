@@ -30,6 +30,15 @@ type Instantiate3 = unsafe extern "C" fn(
     Option<Logger3>,
     *const c_void,
 ) -> *mut c_void;
+type InstantiateMe3 = unsafe extern "C" fn(
+    *const c_char,
+    *const c_char,
+    *const c_char,
+    bool,
+    bool,
+    *mut c_void,
+    Option<Logger3>,
+) -> *mut c_void;
 type EnterInit3 = unsafe extern "C" fn(*mut c_void, bool, f64, f64, bool, f64) -> Status;
 type DoStep3 = unsafe extern "C" fn(*mut c_void, f64, f64, bool, *mut bool, *mut bool, *mut bool, *mut f64) -> Status;
 type Values3 = unsafe extern "C" fn(*mut c_void, *const u32, usize, *mut f64, usize) -> Status;
@@ -78,23 +87,23 @@ type StateSize = unsafe extern "C" fn(*mut c_void, *mut c_void, *mut usize) -> S
 type Serialize = unsafe extern "C" fn(*mut c_void, *mut c_void, *mut u8, usize) -> Status;
 type Deserialize = unsafe extern "C" fn(*mut c_void, *const u8, usize, *mut *mut c_void) -> Status;
 
-/// The functions of one version.
+/// The functions of one version: those both interfaces share, and either
+/// co-simulation's or model exchange's (`me`).
 enum Functions {
     V3 {
-        instantiate: Instantiate3,
         enter_init: EnterInit3,
-        do_step: DoStep3,
         get: Values3,
         set: SetValues3,
+        cs: Option<(Instantiate3, DoStep3)>,
+        me: Option<InstantiateMe3>,
     },
     V2 {
         instantiate: Instantiate2,
         setup: Setup2,
         enter_init: Unary,
-        do_step: DoStep2,
         get: Values2,
         set: SetValues2,
-        real_status: RealStatus2,
+        cs: Option<(DoStep2, RealStatus2)>,
     },
 }
 
@@ -111,6 +120,8 @@ struct StateFunctions {
 /// A loaded FMU binary: its functions, the library kept open beside them.
 pub struct Binary {
     functions: Functions,
+    /// Model exchange's functions, when loaded for it.
+    pub(super) me: Option<super::binding_me::MeFunctions>,
     exit_init: Unary,
     terminate: Unary,
     free_instance: Free,
@@ -120,41 +131,41 @@ pub struct Binary {
 
 impl Binary {
     /// Loads the binary at `path` (FMI `version`) and looks up the
-    /// functions a co-simulation master calls; a missing one is an error
-    /// naming it.
-    pub fn load(path: &Path, version: Version, with_state: bool) -> Result<Arc<Binary>, String> {
+    /// functions a co-simulation master (or, with `model_exchange`, an
+    /// integrator) calls; a missing one is an error naming it.
+    pub fn load(path: &Path, version: Version, with_state: bool, model_exchange: bool) -> Result<Arc<Binary>, String> {
         // SAFETY: loading a shared library runs its initialisers: the FMU's
         // binary is code the user chose to run, as any FMI importer does.
         let library =
             unsafe { libloading::Library::new(path) }.map_err(|e| format!("cannot load {}: {e}", path.display()))?;
-        fn get<T: Copy>(lib: &libloading::Library, name: &str) -> Result<T, String> {
-            // SAFETY: `T` is the function's type in the FMI headers.
-            unsafe { lib.get::<T>(name.as_bytes()) }
-                .map(|s| *s)
-                .map_err(|_| format!("the FMU's binary has no `{name}`"))
-        }
         let p = match version {
             Version::Fmi3 => "fmi3",
             Version::Fmi2 => "fmi2",
         };
         let functions = match version {
             Version::Fmi3 => Functions::V3 {
-                instantiate: get(&library, "fmi3InstantiateCoSimulation")?,
                 enter_init: get(&library, "fmi3EnterInitializationMode")?,
-                do_step: get(&library, "fmi3DoStep")?,
                 get: get(&library, "fmi3GetFloat64")?,
                 set: get(&library, "fmi3SetFloat64")?,
+                cs: match model_exchange {
+                    false => Some((get(&library, "fmi3InstantiateCoSimulation")?, get(&library, "fmi3DoStep")?)),
+                    true => None,
+                },
+                me: if model_exchange { Some(get(&library, "fmi3InstantiateModelExchange")?) } else { None },
             },
             Version::Fmi2 => Functions::V2 {
                 instantiate: get(&library, "fmi2Instantiate")?,
                 setup: get(&library, "fmi2SetupExperiment")?,
                 enter_init: get(&library, "fmi2EnterInitializationMode")?,
-                do_step: get(&library, "fmi2DoStep")?,
                 get: get(&library, "fmi2GetReal")?,
                 set: get(&library, "fmi2SetReal")?,
-                real_status: get(&library, "fmi2GetRealStatus")?,
+                cs: match model_exchange {
+                    false => Some((get(&library, "fmi2DoStep")?, get(&library, "fmi2GetRealStatus")?)),
+                    true => None,
+                },
             },
         };
+        let me = if model_exchange { Some(super::binding_me::MeFunctions::load(&library, version)?) } else { None };
         let state = if with_state {
             let s = if version == Version::Fmi3 { "FMUState" } else { "FMUstate" };
             let deserialize =
@@ -175,10 +186,17 @@ impl Binary {
             terminate: get(&library, &format!("{p}Terminate"))?,
             free_instance: get(&library, &format!("{p}FreeInstance"))?,
             functions,
+            me,
             state,
             _library: library,
         }))
     }
+}
+
+/// The function `name` of `lib`, typed `T`; an error naming it when missing.
+pub(super) fn get<T: Copy>(lib: &libloading::Library, name: &str) -> Result<T, String> {
+    // SAFETY: `T` is the function's type in the FMI headers.
+    unsafe { lib.get::<T>(name.as_bytes()) }.map(|s| *s).map_err(|_| format!("the FMU's binary has no `{name}`"))
 }
 
 /// What an instance's logger received, newest last (kept short).
@@ -276,29 +294,34 @@ impl Instance {
         let c = |s: &str| CString::new(s).map_err(|_| format!("`{s}` holds a NUL"));
         let (c_name, c_token) = (c(name)?, c(token)?);
         let (handle, callbacks) = match binary.functions {
-            Functions::V3 { instantiate, .. } => {
+            Functions::V3 { cs, me, .. } => {
                 let resources = c(&format!("{}/", resources.display()))?;
-                // SAFETY: the FMI 3 signature; the strings and the message
+                let (n, t, r) = (c_name.as_ptr(), c_token.as_ptr(), resources.as_ptr());
+                // SAFETY: the FMI 3 signatures; the strings and the message
                 // list outlive the call (the list, the instance).
-                let h = unsafe {
-                    instantiate(
-                        c_name.as_ptr(),
-                        c_token.as_ptr(),
-                        resources.as_ptr(),
-                        false,
-                        false,
-                        false,
-                        false,
-                        std::ptr::null(),
-                        0,
-                        env,
-                        Some(log3),
-                        std::ptr::null(),
-                    )
+                let h = match (cs, me) {
+                    (Some((instantiate, _)), _) => unsafe {
+                        instantiate(
+                            n,
+                            t,
+                            r,
+                            false,
+                            false,
+                            false,
+                            false,
+                            std::ptr::null(),
+                            0,
+                            env,
+                            Some(log3),
+                            std::ptr::null(),
+                        )
+                    },
+                    (None, Some(instantiate)) => unsafe { instantiate(n, t, r, false, false, env, Some(log3)) },
+                    (None, None) => std::ptr::null_mut(),
                 };
                 (h, None)
             }
-            Functions::V2 { instantiate, .. } => {
+            Functions::V2 { instantiate, cs, .. } => {
                 let uri = c(&file_uri(resources))?;
                 let callbacks = Box::new(Callbacks2 {
                     logger: log2,
@@ -307,11 +330,10 @@ impl Instance {
                     step_finished: std::ptr::null(),
                     env,
                 });
-                const CO_SIMULATION: c_int = 1;
+                let kind: c_int = if cs.is_some() { 1 } else { 0 }; // fmi2CoSimulation, fmi2ModelExchange
                 // SAFETY: the FMI 2 signature; the callbacks live as long as the instance.
-                let h = unsafe {
-                    instantiate(c_name.as_ptr(), CO_SIMULATION, c_token.as_ptr(), uri.as_ptr(), &*callbacks, 0, 0)
-                };
+                let h =
+                    unsafe { instantiate(c_name.as_ptr(), kind, c_token.as_ptr(), uri.as_ptr(), &*callbacks, 0, 0) };
                 (h, Some(callbacks))
             }
         };
@@ -321,7 +343,16 @@ impl Instance {
         Ok(Instance { binary: binary.clone(), handle, messages, _callbacks: callbacks })
     }
 
-    fn check(&self, what: &str, status: Status) -> Result<(), String> {
+    pub(super) fn binary(&self) -> &Binary {
+        &self.binary
+    }
+
+    /// The FMU's handle of this instance, for model exchange's calls.
+    pub(super) fn handle(&self) -> *mut c_void {
+        self.handle
+    }
+
+    pub(super) fn check(&self, what: &str, status: Status) -> Result<(), String> {
         match status {
             OK | WARNING => Ok(()),
             s => Err(failure(what, s, &self.messages)),
@@ -380,7 +411,7 @@ impl Instance {
     /// where it stopped).
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), String> {
         match self.binary.functions {
-            Functions::V3 { do_step, .. } => {
+            Functions::V3 { cs: Some((_, do_step)), .. } => {
                 let (mut event, mut terminate, mut early, mut last) = (false, false, false, t);
                 // SAFETY: the FMI 3 signature with valid out-parameters.
                 let status =
@@ -392,7 +423,7 @@ impl Instance {
                 }
                 Ok(())
             }
-            Functions::V2 { do_step, real_status, .. } => {
+            Functions::V2 { cs: Some((do_step, real_status)), .. } => {
                 // SAFETY: the FMI 2 signature.
                 let status = unsafe { do_step(self.handle, t, h, 1) };
                 if status == DISCARD {
@@ -404,6 +435,7 @@ impl Instance {
                 }
                 self.check(&format!("doStep from t = {t} over {h} s"), status)
             }
+            _ => Err("doStep: the FMU was loaded for model exchange".to_string()),
         }
     }
 

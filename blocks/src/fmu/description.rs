@@ -81,8 +81,22 @@ pub struct Description {
     pub token: String,
     /// The co-simulation interface's `modelIdentifier` (None: the FMU has none).
     pub co_simulation: Option<CoSimulation>,
+    /// The model-exchange interface's `modelIdentifier`, and how many
+    /// continuous states and event indicators it has.
+    pub model_exchange: Option<ModelExchange>,
     pub default_step: Option<f64>,
     pub variables: Vec<Variable>,
+    /// The model-exchange interface's state flags (FMI 3 and 2 put them on
+    /// each interface's element).
+    pub can_get_and_set_state: bool,
+    pub can_serialize_state: bool,
+}
+
+#[derive(Clone, Debug)]
+pub struct ModelExchange {
+    pub model_identifier: String,
+    pub states: usize,
+    pub event_indicators: usize,
 }
 
 #[derive(Clone, Debug)]
@@ -139,11 +153,54 @@ pub fn parse(text: &str) -> Result<Description, String> {
             parsed.map_err(|e| format!("modelDescription.xml, line {}: {e}", doc.text_pos_at(v.range().start).row))?,
         );
     }
+    let me_flags = child("ModelExchange").map_or((false, false), |me| {
+        let (get_set, serialize) = match version {
+            Version::Fmi3 => ("canGetAndSetFMUState", "canSerializeFMUState"),
+            Version::Fmi2 => ("canGetAndSetFMUstate", "canSerializeFMUstate"),
+        };
+        (flag(me, get_set), flag(me, serialize))
+    });
+    let model_exchange = child("ModelExchange").map(|me| {
+        let structure = child("ModelStructure");
+        let size_of = |vr: Option<&str>| {
+            let vr: Option<u32> = vr.and_then(|r| r.trim().parse().ok());
+            variables.iter().find(|v| Some(v.value_reference) == vr).map_or(1, |v| v.size)
+        };
+        let (states, event_indicators) = match version {
+            // Each `<ContinuousStateDerivative>` and `<EventIndicator>` names a variable (an array counts its elements).
+            Version::Fmi3 => {
+                let count = |tag: &str| {
+                    structure
+                        .iter()
+                        .flat_map(|s| s.children())
+                        .filter(|n| n.has_tag_name(tag))
+                        .map(|n| size_of(n.attribute("valueReference")))
+                        .sum()
+                };
+                (count("ContinuousStateDerivative"), count("EventIndicator"))
+            }
+            Version::Fmi2 => {
+                let derivatives = structure.and_then(|s| s.children().find(|n| n.has_tag_name("Derivatives")));
+                let states = derivatives.map_or(0, |d| d.children().filter(|n| n.has_tag_name("Unknown")).count());
+                let indicators =
+                    root.attribute("numberOfEventIndicators").and_then(|n| n.trim().parse().ok()).unwrap_or(0);
+                (states, indicators)
+            }
+        };
+        ModelExchange {
+            model_identifier: me.attribute("modelIdentifier").unwrap_or("").to_string(),
+            states,
+            event_indicators,
+        }
+    });
     Ok(Description {
         version,
         model_name: root.attribute("modelName").unwrap_or("").to_string(),
         token,
         co_simulation,
+        can_get_and_set_state: me_flags.0,
+        can_serialize_state: me_flags.1,
+        model_exchange,
         default_step,
         variables,
     })

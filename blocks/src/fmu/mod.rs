@@ -1,7 +1,7 @@
-//! The `fmu` block: a co-simulation FMU (FMI 3.0 or 2.0) inside a graph —
-//! a plant from Modelica, Simulink or any FMI exporter.
+//! The `fmu` block: an FMU (FMI 3.0 or 2.0) inside a graph — a plant from
+//! Modelica, Simulink or any FMI exporter. Model exchange is `me.rs`.
 //!
-//! Semantics (as Simulink's FMU block in co-simulation mode): a discrete
+//! Co-simulation semantics (as Simulink's FMU block in that mode): a discrete
 //! block at `sample_time` T. At each hit t_k it outputs the FMU's outputs
 //! at t_k, then (its update) sets the FMU's inputs to their values at t_k
 //! and calls `doStep(t_k, T)`: inputs are held over each step, and the
@@ -13,7 +13,9 @@
 
 mod archive;
 mod binding;
+mod binding_me;
 mod description;
+mod me;
 
 use crate::table::*;
 use binding::{Binary, Instance};
@@ -26,22 +28,32 @@ use std::sync::Arc;
 pub const TYPES: &[BlockType] = &[BlockType {
     name: "fmu",
     category: "co-simulation",
-    summary: "A co-simulation FMU (FMI 3.0 or 2.0): a plant or controller from another tool.",
+    summary: "An FMU (FMI 3.0 or 2.0, co-simulation or model exchange): a plant or controller from another tool.",
     doc: "Loads `file` (an .fmu, relative to the graph), unpacked once into ctlgraph's cache \
           (`$CTLGRAPH_CACHE_DIR`, …/fmus/<hash>), and runs its binary for this platform. Ports: the \
           FMU's real inputs and outputs (`Float64`, FMI 2 `Real`), named by the variables (characters \
           other than letters, digits and _ become _), arrays as vectors; `inputs`/`outputs` select and \
           order them. `parameters` sets the FMU's parameters before initialisation (values may be \
-          expressions of the graph's parameters). Co-simulation (Simulink's FMU block): at each hit \
-          t_k of `sample_time` (default: the FMU's DefaultExperiment stepSize) the outputs are the \
-          FMU's at t_k; then the inputs at t_k are set and doStep(t_k, T) runs, inputs held over the \
-          step — no direct feedthrough. A discarded step, an early return or an error status stops the \
-          run, naming the block, with what the FMU logged. `ctlgraph check` lists the FMU's variables.",
+          expressions of the graph's parameters). `mode: cs`, co-simulation (Simulink's FMU block): a \
+          discrete block; at each hit t_k of `sample_time` (default: the FMU's DefaultExperiment \
+          stepSize) the outputs are the FMU's at t_k, then the inputs at t_k are set and doStep(t_k, T) \
+          runs, inputs held over the step — no direct feedthrough. `mode: me`, model exchange: a \
+          continuous block whose states are the FMU's continuous states, integrated by the graph's \
+          solver (TR-BDF2's Jacobian by finite differences); its event indicators are zero crossings, \
+          located like any block's; its time events are major steps; at each major step \
+          completedIntegratorStep is called and, at an event, the discrete states are updated until \
+          the FMU needs no more (FMI 3.0 §3.2) and the states it resets taken; inputs feed through. \
+          A discarded step, an early return or an error status stops the run, naming the block, with \
+          what the FMU logged. `ctlgraph check` lists the FMU's variables.",
     inputs: &[PortDoc { name: "(the FMU's inputs)", doc: "one port per selected input variable" }],
     outputs: &[PortDoc { name: "(the FMU's outputs)", doc: "one port per selected output variable" }],
     params: &[
         param("file", Required, "the FMU, relative to the graph file"),
-        param("mode", Word("cs"), "cs: co-simulation (the FMU's own solver between hits)"),
+        param(
+            "mode",
+            Word("cs"),
+            "cs: co-simulation (the FMU's own solver between hits); me: model exchange (ctlgraph's solver)",
+        ),
         param(
             "sample_time",
             Described("the FMU's DefaultExperiment stepSize"),
@@ -62,10 +74,13 @@ use ctlgraph_core::registry::PortDoc;
 
 /// An FMU loaded for the blocks that use it: its binary, description and
 /// resources.
-struct Loaded {
+pub(super) struct Loaded {
     binary: Arc<Binary>,
     description: Description,
     resources: PathBuf,
+    /// Whether the interface used can get, set and serialise its state
+    /// (what copying a run's instance needs).
+    can_copy_state: bool,
 }
 
 /// A selected port: its name, the variable's value reference and size
@@ -78,16 +93,41 @@ struct Port {
 
 fn build_fmu(p: &mut Params) -> Result<Built, Diagnostic> {
     let path = p.path("file")?;
-    if p.choice("mode", &["cs", "me"])? == "me" {
-        return Err(p
-            .error("mode", "model exchange is not available yet: use `mode: cs` (the FMU's own solver between hits)")
-            .with_hint("an FMU exported for co-simulation runs as `mode: cs`"));
-    }
-    let loaded = load(&path).map_err(|e| p.error("file", format!("`{}`: {e}", path.display())))?;
+    let me = p.choice("mode", &["cs", "me"])? == "me";
+    let loaded = load(&path, me).map_err(|e| p.error("file", format!("`{}`: {e}", path.display())))?;
     let d = &loaded.description;
-    let cs = d.co_simulation.as_ref().ok_or_else(|| {
-        p.error("file", format!("`{}` has no co-simulation interface (it is for model exchange only)", path.display()))
-    })?;
+    let inputs = select(p, d, "inputs", Causality::Input)?;
+    let outputs = select(p, d, "outputs", Causality::Output)?;
+    let parameters = parameters(p, d)?;
+    let refs = |ports: &[Port]| ports.iter().map(|p| p.reference).collect::<Vec<_>>();
+    let len = |ports: &[Port]| ports.iter().map(|p| p.size).sum::<usize>();
+    if me {
+        let interface = d.model_exchange.as_ref().ok_or_else(|| no_interface(p, &path, "model exchange"))?;
+        let mut iface = Interface::new(ctlgraph_core::SampleTime::Continuous);
+        for port in &inputs {
+            iface = iface.input(&port.name, Width::Fixed(port.size), true);
+        }
+        for port in &outputs {
+            iface = iface.output(&port.name, Width::Fixed(port.size));
+        }
+        let shared = me::Shared {
+            name: p.block_name().to_string(),
+            token: d.token.clone(),
+            can_copy_state: loaded.can_copy_state,
+            input_refs: refs(&inputs),
+            input_len: len(&inputs),
+            output_refs: refs(&outputs),
+            output_len: len(&outputs),
+            parameters,
+            n_states: interface.states,
+            n_indicators: interface.event_indicators,
+            report: report(d, &path, None),
+            loaded: Arc::new(loaded),
+        };
+        let block = me::MeBlock { shared, next_time: f64::INFINITY, located: false, run: None };
+        return Ok(Built::new(block, iface));
+    }
+    d.co_simulation.as_ref().ok_or_else(|| no_interface(p, &path, "co-simulation"))?;
     let (st, period, offset) = if p.has("sample_time") {
         p.discrete_clock()?
     } else {
@@ -96,9 +136,6 @@ fn build_fmu(p: &mut Params) -> Result<Built, Diagnostic> {
             .ok_or_else(|| p.block_error("the FMU gives no DefaultExperiment stepSize: set `sample_time: T`"))?;
         (ctlgraph_core::SampleTime::Discrete { period: step, offset: 0.0 }, step, 0.0)
     };
-    let inputs = select(p, d, "inputs", Causality::Input)?;
-    let outputs = select(p, d, "outputs", Causality::Output)?;
-    let parameters = parameters(p, d)?;
     let mut iface = Interface::new(st);
     for port in &inputs {
         iface = iface.input(&port.name, Width::Fixed(port.size), false);
@@ -106,50 +143,64 @@ fn build_fmu(p: &mut Params) -> Result<Built, Diagnostic> {
     for port in &outputs {
         iface = iface.output(&port.name, Width::Fixed(port.size));
     }
-    let report = report(d, &path, period);
     let block = FmuBlock {
         name: p.block_name().to_string(),
         token: d.token.clone(),
-        can_copy_state: cs.can_get_and_set_state && cs.can_serialize_state,
-        loaded: Arc::new(loaded),
-        input_refs: inputs.iter().map(|p| p.reference).collect(),
-        input_len: inputs.iter().map(|p| p.size).sum(),
-        output_refs: outputs.iter().map(|p| p.reference).collect(),
-        output_len: outputs.iter().map(|p| p.size).sum(),
+        can_copy_state: loaded.can_copy_state,
+        input_refs: refs(&inputs),
+        input_len: len(&inputs),
+        output_refs: refs(&outputs),
+        output_len: len(&outputs),
         parameters,
         period,
         offset,
-        report,
+        report: report(d, &path, Some(period)),
+        loaded: Arc::new(loaded),
         run: None,
     };
     Ok(Built::new(block, iface.piecewise_constant()))
 }
 
-/// The FMU at `path`, unpacked, described and its binary loaded.
-fn load(path: &std::path::Path) -> Result<Loaded, String> {
+/// The error for an FMU without the interface `mode` asks for.
+fn no_interface(p: &Params, path: &std::path::Path, interface: &str) -> Diagnostic {
+    let other = if interface == "co-simulation" { "me" } else { "cs" };
+    p.error("file", format!("`{}` has no {interface} interface", path.display()))
+        .with_hint(format!("its other interface: `mode: {other}`"))
+}
+
+/// The FMU at `path`, unpacked, described and its binary loaded for
+/// co-simulation or (`me`) model exchange.
+fn load(path: &std::path::Path, me: bool) -> Result<Loaded, String> {
     let dir = archive::unpacked(path)?;
     let text =
         std::fs::read_to_string(dir.join("modelDescription.xml")).map_err(|e| format!("modelDescription.xml: {e}"))?;
     let description = description::parse(&text)?;
-    let cs = description.co_simulation.as_ref().ok_or("no co-simulation interface")?;
+    let identifier = match (me, &description.co_simulation, &description.model_exchange) {
+        (false, Some(cs), _) => cs.model_identifier.clone(),
+        (true, _, Some(m)) => m.model_identifier.clone(),
+        (false, None, _) => return Err("no co-simulation interface (for model exchange: `mode: me`)".into()),
+        (true, _, None) => return Err("no model-exchange interface (for co-simulation: `mode: cs`)".into()),
+    };
     let folder = match description.version {
         description::Version::Fmi3 => "x86_64-linux",
         description::Version::Fmi2 => "linux64",
     };
-    let binary_path = dir.join("binaries").join(folder).join(format!("{}.so", cs.model_identifier));
+    let binary_path = dir.join("binaries").join(folder).join(format!("{identifier}.so"));
     if !binary_path.is_file() {
         let platforms: Vec<String> = std::fs::read_dir(dir.join("binaries"))
             .map(|r| r.filter_map(|e| e.ok()).map(|e| e.file_name().to_string_lossy().into_owned()).collect())
             .unwrap_or_default();
         return Err(format!(
-            "no binary for this platform ({folder}/{}.so); the FMU has binaries for: {}",
-            cs.model_identifier,
+            "no binary for this platform ({folder}/{identifier}.so); the FMU has binaries for: {}",
             if platforms.is_empty() { "none (a source-only FMU)".to_string() } else { platforms.join(", ") }
         ));
     }
-    let with_state = cs.can_get_and_set_state && cs.can_serialize_state;
-    let binary = Binary::load(&binary_path, description.version, with_state)?;
-    Ok(Loaded { binary, description, resources: dir.join("resources") })
+    let can_copy_state = match (me, &description.co_simulation) {
+        (false, Some(cs)) => cs.can_get_and_set_state && cs.can_serialize_state,
+        _ => description.can_get_and_set_state && description.can_serialize_state,
+    };
+    let binary = Binary::load(&binary_path, description.version, can_copy_state, me)?;
+    Ok(Loaded { binary, description, resources: dir.join("resources"), can_copy_state })
 }
 
 /// A port name from a variable name: letters, digits and _ kept.
@@ -250,16 +301,20 @@ fn parameters(p: &mut Params, d: &Description) -> Result<Vec<(u32, Vec<f64>)>, D
 }
 
 /// What `ctlgraph check` prints: the FMU and its variables.
-fn report(d: &Description, path: &std::path::Path, period: f64) -> String {
+fn report(d: &Description, path: &std::path::Path, period: Option<f64>) -> String {
     let version = match d.version {
         description::Version::Fmi3 => "3.0",
         description::Version::Fmi2 => "2.0",
     };
-    let mut lines = vec![format!(
-        "FMU `{}` (FMI {version}, co-simulation), `{}`, step {period} s; variables:",
-        d.model_name,
-        path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default()
-    )];
+    let how = match period {
+        Some(period) => format!("co-simulation, step {period} s"),
+        None => match &d.model_exchange {
+            Some(me) => format!("model exchange, {} states, {} event indicators", me.states, me.event_indicators),
+            None => "model exchange".to_string(),
+        },
+    };
+    let file = path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut lines = vec![format!("FMU `{}` (FMI {version}, {how}), `{file}`; variables:", d.model_name)];
     for v in d.variables.iter().filter(|v| v.causality != Causality::Local) {
         let size = if v.size > 1 { format!("[{}]", v.size) } else { String::new() };
         let unit = v.unit.as_ref().map(|u| format!(" [{u}]")).unwrap_or_default();
@@ -303,7 +358,7 @@ struct Run {
 }
 
 /// A copy's instance before its first use (never seen: `ready` makes it).
-const NOT_YET_RESTORED: &str = "a copy's instance, not yet restored";
+pub(super) const NOT_YET_RESTORED: &str = "a copy's instance, not yet restored";
 
 impl Clone for FmuBlock {
     /// A copy with its own FMU instance: for a snapshot of a run, the FMU's
