@@ -14,6 +14,9 @@ fn main() {
         collect(&root.join(dir), &mut files);
         println!("cargo::rerun-if-changed={}", root.join(dir).display());
     }
+    // Not graphs/fmu/loop.yaml: it needs an FMU exported first (by the tests),
+    // and whether it exists must not change what this crate is.
+    files.retain(|f| !f.starts_with(root.join("graphs/fmu")) || f.ends_with("van_der_pol.yaml"));
     files.sort();
     let registry = ctlgraph_blocks::registry();
     let (mut modules, mut generated) = (String::new(), String::new());

@@ -18,10 +18,14 @@ fn write_graph(dir: &Path, name: &str, checks: &str) -> String {
 
 #[test]
 fn every_bundled_graph_passes_its_checks() {
+    // graphs/fmu/loop.yaml runs the Van der Pol plant as an FMU: exported here.
+    let out = ctlgraph(&["fmu", "graphs/fmu/van_der_pol.yaml", "--out", "graphs/fmu/van_der_pol.fmu"]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
     let out = ctlgraph(&["test", "graphs"]);
     let stdout = text(&out.stdout);
     assert_eq!(out.status.code(), Some(0), "{stdout}{}", text(&out.stderr));
     assert!(stdout.contains("graphs/tutorial/pid_loop.yaml") && stdout.contains(" 0 failed"), "{stdout}");
+    assert!(stdout.contains("graphs/fmu/loop.yaml"), "{stdout}");
     assert!(!stdout.contains("lib/pi_controller.yaml"), "subsystem files without checks are skipped");
 }
 

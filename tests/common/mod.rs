@@ -74,6 +74,9 @@ pub fn bundled_graphs() -> Vec<PathBuf> {
     }
     let mut found = Vec::new();
     walk(Path::new("graphs"), &mut found);
+    // Not `graphs/fmu/`: its loop needs an FMU exported first, which
+    // `tests/checks.rs` does before `ctlgraph test graphs`.
+    found.retain(|g| !g.starts_with("graphs/fmu"));
     found.sort();
     found
 }

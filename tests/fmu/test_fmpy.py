@@ -211,3 +211,26 @@ def test_bad_use_is_an_error_status_with_a_logged_message(tmp_path):
         slave("missing")
     assert any("ctlgraph.json" in m for _, m in messages), messages
     shutil.rmtree(unzipped, ignore_errors=True)
+
+
+def test_a_van_der_pol_fmu_under_a_silent_ctlgraph_controller_gives_fmpys_open_loop(tmp_path):
+    # The plant of graphs/fmu/, exported; in a graph, an `fmu` block driven
+    # by a PD controller whose gains are zero; beside it, FMPy's open loop.
+    fmu = export("graphs/fmu/van_der_pol.yaml", tmp_path / "van_der_pol.fmu")
+    graph = tmp_path / "loop.yaml"
+    text = (ROOT / "graphs/fmu/loop.yaml").read_text()
+    graph.write_text(text.split("\nchecks:")[0] + "\n")
+    out = tmp_path / "loop.csv"
+    done = subprocess.run(
+        [BIN, "run", str(graph), "--out", str(out), "--set", "kp=0", "--set", "kd=0"],
+        capture_output=True, text=True, env=ENV, timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    with open(out) as f:
+        rows = list(csv.reader(f))
+    ours = {h: np.array([float(r[i]) for r in rows[1:]]) for i, h in enumerate(rows[0])}
+    assert np.all(ours["u"] == 0.0)
+    result = simulate_fmu(str(fmu), stop_time=20.0, output_interval=0.01, output=["x"])
+    want = at_times(ours, result["time"], "x")
+    assert np.max(np.abs(result["x"] - want)) <= 1e-12
+    assert np.max(np.abs(result["x"][result["time"] > 10])) > 1.9  # the limit cycle, undamped

@@ -86,7 +86,7 @@ impl Clone for Copied {
 impl Shared {
     /// A new instance, its parameters set, initialised and settled; its
     /// initial states into `x0` (when given) and its next time event.
-    fn instantiate(&self, x0: Option<&mut [f64]>) -> Result<(Instance, f64), String> {
+    pub(super) fn instantiate(&self, x0: Option<&mut [f64]>) -> Result<(Instance, f64), String> {
         let mut i = Instance::new(&self.loaded.binary, &self.name, &self.token, &self.loaded.resources)?;
         i.enter_initialization(0.0)?;
         for (reference, values) in &self.parameters {

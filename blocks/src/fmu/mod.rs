@@ -94,7 +94,18 @@ struct Port {
 fn build_fmu(p: &mut Params) -> Result<Built, Diagnostic> {
     let path = p.path("file")?;
     let me = p.choice("mode", &["cs", "me"])? == "me";
-    let loaded = load(&path, me).map_err(|e| p.error("file", format!("`{}`: {e}", path.display())))?;
+    let loaded = load(&path, me).map_err(|e| {
+        let d = p.error("file", format!("`{}`: {e}", path.display()));
+        // An FMU exported from a graph beside it (as graphs/fmu's): say how.
+        match path.with_extension("yaml") {
+            graph if !path.exists() && graph.is_file() => d.with_hint(format!(
+                "export it from the graph beside it: ctlgraph fmu {} --out {}",
+                graph.display(),
+                path.display()
+            )),
+            _ => d,
+        }
+    })?;
     let d = &loaded.description;
     let inputs = select(p, d, "inputs", Causality::Input)?;
     let outputs = select(p, d, "outputs", Causality::Output)?;
@@ -124,6 +135,11 @@ fn build_fmu(p: &mut Params) -> Result<Built, Diagnostic> {
             report: report(d, &path, None),
             loaded: Arc::new(loaded),
         };
+        // Instantiated and initialised once now, so that what fails there
+        // (the parameters, the FMU's own checks) is reported at the block.
+        if let Err(e) = shared.instantiate(None) {
+            return Err(at_initialisation(p, e));
+        }
         let block = me::MeBlock { shared, next_time: f64::INFINITY, located: false, run: None };
         return Ok(Built::new(block, iface));
     }
@@ -158,7 +174,18 @@ fn build_fmu(p: &mut Params) -> Result<Built, Diagnostic> {
         loaded: Arc::new(loaded),
         run: None,
     };
+    if let Err(e) = block.instantiate() {
+        return Err(at_initialisation(p, e));
+    }
     Ok(Built::new(block, iface.piecewise_constant()))
+}
+
+/// An instantiation or initialisation that failed while building: at the
+/// block's `parameters` when it has them (they are what initialisation
+/// takes from the graph), else at its `file`.
+fn at_initialisation(p: &Params, error: String) -> Diagnostic {
+    let key = if p.has("parameters") { "parameters" } else { "file" };
+    p.error(key, format!("the FMU does not initialise: {error}"))
 }
 
 /// The error for an FMU without the interface `mode` asks for.
