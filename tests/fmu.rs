@@ -500,3 +500,31 @@ fn a_model_exchange_fmus_time_event_is_a_major_step_and_its_state_jump_is_taken(
     assert!((after[2] - (-9.81 * 0.5 + 3.0)).abs() < 1e-9, "v after the kick: {after:?} (before {before:?})");
     assert!((after[1] - (10.0 - 0.5 * 9.81 * 0.25)).abs() < 1e-9, "h is continuous: {after:?}");
 }
+
+#[test]
+fn an_fmu_that_fails_in_a_step_stops_the_run_at_the_block_with_what_it_said() {
+    let dir = tempfile::tempdir().unwrap();
+    // A plant whose output is 1/(u − 1): infinite, inside the FMU, once u = 1.
+    let plant = dir.path().join("pole.yaml");
+    std::fs::write(
+        &plant,
+        "simulation: { stop: 5, solver: { method: rk4, step: 0.01 } }\nblocks:\n  u: { type: inport }\n  \
+         f: { type: fcn, inputs: 1, expr: \"1/(u1 - 1)\" }\n  y: { type: outport }\nwires: [u -> f, f -> y]\n",
+    )
+    .unwrap();
+    let fmu = dir.path().join("pole.fmu");
+    let out = ctlgraph(&["fmu", plant.to_str().unwrap(), "--out", fmu.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let graph = dir.path().join("drive.yaml");
+    std::fs::write(
+        &graph,
+        "simulation: { stop: 3, solver: { method: rk4, step: 0.01 } }\nblocks:\n  r: { type: ramp, slope: 1 }\n  \
+         p: { type: fmu, file: pole.fmu, sample_time: 0.1 }\nwires: [r -> p]\nrecord: [p]\n",
+    )
+    .unwrap();
+    let out = ctlgraph(&["run", graph.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", text(&out.stderr));
+    let err = text(&out.stderr);
+    assert!(err.contains("block `p`") && err.contains("drive.yaml:4:3)"), "{err}");
+    assert!(err.contains("returned error (the FMU said:") && err.contains("fmi3DoStep"), "{err}");
+}

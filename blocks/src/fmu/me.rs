@@ -35,6 +35,8 @@ pub struct MeBlock {
 #[derive(Clone)]
 pub(super) struct Shared {
     pub name: String,
+    /// `file:line:col` of the block, for errors at run time.
+    pub at: String,
     pub token: String,
     pub can_copy_state: bool,
     pub loaded: Arc<Loaded>,
@@ -247,7 +249,11 @@ impl Block for MeBlock {
 
     fn diagnose(&self) -> Option<String> {
         let run = self.run.as_ref()?.run.lock().ok()?;
-        run.instance.as_ref().err().filter(|e| *e != NOT_YET_RESTORED).map(|e| format!("the FMU: {e}"))
+        run.instance
+            .as_ref()
+            .err()
+            .filter(|e| *e != NOT_YET_RESTORED)
+            .map(|e| format!("the FMU ({}): {e}", self.shared.at))
     }
 
     fn build_report(&self) -> Option<String> {

@@ -111,6 +111,8 @@ fn build_fmu(p: &mut Params) -> Result<Built, Diagnostic> {
     let outputs = select(p, d, "outputs", Causality::Output)?;
     let parameters = parameters(p, d)?;
     let refs = |ports: &[Port]| ports.iter().map(|p| p.reference).collect::<Vec<_>>();
+    // Where the block is written, for the errors the FMU gives at run time.
+    let at = p.block_error("").pos.map(|pos| pos.to_string()).unwrap_or_default();
     let len = |ports: &[Port]| ports.iter().map(|p| p.size).sum::<usize>();
     if me {
         let interface = d.model_exchange.as_ref().ok_or_else(|| no_interface(p, &path, "model exchange"))?;
@@ -123,6 +125,7 @@ fn build_fmu(p: &mut Params) -> Result<Built, Diagnostic> {
         }
         let shared = me::Shared {
             name: p.block_name().to_string(),
+            at,
             token: d.token.clone(),
             can_copy_state: loaded.can_copy_state,
             input_refs: refs(&inputs),
@@ -161,6 +164,7 @@ fn build_fmu(p: &mut Params) -> Result<Built, Diagnostic> {
     }
     let block = FmuBlock {
         name: p.block_name().to_string(),
+        at,
         token: d.token.clone(),
         can_copy_state: loaded.can_copy_state,
         input_refs: refs(&inputs),
@@ -355,6 +359,8 @@ fn report(d: &Description, path: &std::path::Path, period: Option<f64>) -> Strin
 /// instance.
 pub struct FmuBlock {
     name: String,
+    /// `file:line:col` of the block, for errors at run time.
+    at: String,
     token: String,
     can_copy_state: bool,
     loaded: Arc<Loaded>,
@@ -410,6 +416,7 @@ impl Clone for FmuBlock {
         });
         FmuBlock {
             name: self.name.clone(),
+            at: self.at.clone(),
             token: self.token.clone(),
             can_copy_state: self.can_copy_state,
             loaded: self.loaded.clone(),
@@ -511,7 +518,7 @@ impl Block for FmuBlock {
 
     fn diagnose(&self) -> Option<String> {
         match self.run.as_ref().map(|r| &r.instance) {
-            Some(Err(e)) => Some(format!("the FMU: {e}")),
+            Some(Err(e)) => Some(format!("the FMU ({}): {e}", self.at)),
             _ => None,
         }
     }
