@@ -14,7 +14,7 @@
 //! depend on its inputs directly).
 
 use super::binding::Instance;
-use super::{Loaded, NOT_YET_RESTORED};
+use super::{Loaded, NOT_YET_RESTORED, copy_of};
 use ctlgraph_core::{Block, Io};
 use std::sync::{Arc, Mutex};
 
@@ -68,18 +68,7 @@ pub(super) struct Copied {
 impl Clone for Copied {
     fn clone(&self) -> Self {
         let r = self.run.lock().unwrap_or_else(|e| e.into_inner());
-        let pending = match (&r.instance, &r.pending) {
-            (_, Some(bytes)) => Ok(bytes.clone()),
-            (Ok(i), None) if self.can_copy_state => i.serialize(),
-            (Ok(_), None) => {
-                Err("the FMU cannot save and restore its state: a snapshot of this run cannot copy it".into())
-            }
-            (Err(e), None) => Err(e.clone()),
-        };
-        let (instance, pending) = match pending {
-            Ok(bytes) => (Err(NOT_YET_RESTORED.to_string()), Some(bytes)),
-            Err(e) => (Err(e), None),
-        };
+        let (instance, pending) = copy_of(&r.instance, &r.pending, self.can_copy_state);
         let run = Run { instance, pending, inputs: r.inputs.clone(), outputs: r.outputs.clone() };
         Copied { run: Mutex::new(run), can_copy_state: self.can_copy_state }
     }

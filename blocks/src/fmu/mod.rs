@@ -14,13 +14,15 @@
 mod archive;
 mod binding;
 mod binding_me;
+mod cs;
 mod description;
 mod me;
 
 use crate::table::*;
-use binding::{Binary, Instance};
+use binding::Binary;
+use cs::FmuBlock;
 use ctlgraph_core::registry::{BlockType, Built};
-use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
+use ctlgraph_core::{Diagnostic, Interface, Params, Width};
 use description::{Causality, Description, Variable};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -355,190 +357,29 @@ fn report(d: &Description, path: &std::path::Path, period: Option<f64>) -> Strin
     lines.join("\n")
 }
 
-/// The block: the FMU (shared), the selected variables, and this run's
-/// instance.
-pub struct FmuBlock {
-    name: String,
-    /// `file:line:col` of the block, for errors at run time.
-    at: String,
-    token: String,
+/// A copy's instance before its first use (never seen: it is made then).
+const NOT_YET_RESTORED: &str = "a copy's instance, not yet restored";
+
+/// What a copy of a run's instance starts from (a snapshot of the run, in
+/// either mode): no instance yet, and the FMU's state serialised now, to
+/// be restored into a new instance when the copy is first used — or why
+/// it cannot be copied.
+fn copy_of(
+    instance: &Result<binding::Instance, String>,
+    pending: &Option<Vec<u8>>,
     can_copy_state: bool,
-    loaded: Arc<Loaded>,
-    /// The selected variables' value references, and how many numbers they hold.
-    input_refs: Vec<u32>,
-    input_len: usize,
-    output_refs: Vec<u32>,
-    output_len: usize,
-    parameters: Vec<(u32, Vec<f64>)>,
-    period: f64,
-    offset: f64,
-    report: String,
-    /// The run's instance, once initialised; `None` in the compiled model.
-    run: Option<Run>,
-}
-
-/// One run's FMU instance and where it is.
-struct Run {
-    /// The instance, or why there is none (and the run must stop).
-    instance: Result<Instance, String>,
-    /// The communication steps taken: the FMU is at offset + steps·T.
-    steps: u64,
-    /// A copy's FMU state, applied when the copy is first used.
-    pending: Option<Vec<u8>>,
-    /// The values exchanged at a hit (allocated once, with the run).
-    inputs: Vec<f64>,
-    outputs: Vec<f64>,
-}
-
-/// A copy's instance before its first use (never seen: `ready` makes it).
-pub(super) const NOT_YET_RESTORED: &str = "a copy's instance, not yet restored";
-
-impl Clone for FmuBlock {
-    /// A copy with its own FMU instance: for a snapshot of a run, the FMU's
-    /// state serialised now and restored into a new instance when the copy
-    /// is first used.
-    fn clone(&self) -> Self {
-        let run = self.run.as_ref().map(|r| {
-            let pending = match (&r.instance, &r.pending) {
-                // A copy not yet used: its state, again.
-                (_, Some(bytes)) => Ok(bytes.clone()),
-                (Ok(i), None) if self.can_copy_state => i.serialize(),
-                (Ok(_), None) => Err("the FMU cannot save and restore its state (canSerializeFMUState is false): \
-                                     a snapshot of this run cannot copy it"
-                    .to_string()),
-                (Err(e), None) => Err(e.clone()),
-            };
-            let (instance, pending) = match pending {
-                Ok(bytes) => (Err(NOT_YET_RESTORED.to_string()), Some(bytes)),
-                Err(e) => (Err(e), None),
-            };
-            Run { instance, steps: r.steps, pending, inputs: r.inputs.clone(), outputs: r.outputs.clone() }
-        });
-        FmuBlock {
-            name: self.name.clone(),
-            at: self.at.clone(),
-            token: self.token.clone(),
-            can_copy_state: self.can_copy_state,
-            loaded: self.loaded.clone(),
-            input_refs: self.input_refs.clone(),
-            input_len: self.input_len,
-            output_refs: self.output_refs.clone(),
-            output_len: self.output_len,
-            parameters: self.parameters.clone(),
-            period: self.period,
-            offset: self.offset,
-            report: self.report.clone(),
-            run,
-        }
-    }
-}
-
-impl FmuBlock {
-    /// A new instance, its parameters set and initialised.
-    fn instantiate(&self) -> Result<Instance, String> {
-        let mut i = Instance::new(&self.loaded.binary, &self.name, &self.token, &self.loaded.resources)?;
-        i.enter_initialization(self.offset)?;
-        for (reference, values) in &self.parameters {
-            i.set(&[*reference], values)?;
-        }
-        i.exit_initialization()?;
-        Ok(i)
-    }
-
-    /// Makes the run's instance ready: a copy's made and its state
-    /// restored on first use.
-    fn ready(&mut self) -> Result<(), String> {
-        let pending = match self.run.as_mut() {
-            None => return Err("the block was not initialised (internal error)".to_string()),
-            Some(r) => r.pending.take(),
-        };
-        if let Some(bytes) = pending {
-            let made = self.instantiate().and_then(|mut i| i.deserialize(&bytes).map(|()| i));
-            if let Some(r) = self.run.as_mut() {
-                r.instance = made;
-            }
-        }
-        match self.run.as_ref().map(|r| &r.instance) {
-            Some(Ok(_)) => Ok(()),
-            Some(Err(e)) => Err(e.clone()),
-            None => Err("no run".to_string()),
-        }
-    }
-}
-
-impl Block for FmuBlock {
-    fn initialize(&mut self, _x0: &mut [f64]) {
-        self.run = None; // the previous instance is freed first
-        let instance = self.instantiate();
-        let (inputs, outputs) = (vec![0.0; self.input_len], vec![0.0; self.output_len]);
-        self.run = Some(Run { instance, steps: 0, pending: None, inputs, outputs });
-    }
-
-    /// The FMU's outputs at this hit (NaN once it failed).
-    fn output(&mut self, io: &mut Io) {
-        let got = self.ready().and_then(|()| match self.run.as_mut() {
-            Some(Run { instance: Ok(i), outputs, .. }) => i.get(&self.output_refs, outputs),
-            _ => Err("no instance".to_string()),
-        });
-        if let Err(e) = got {
-            self.fail(e);
-        }
-        let Some(run) = self.run.as_ref() else { return };
-        let mut k = 0;
-        for port in 0..io.num_outputs() {
-            for j in 0..io.output_width(port) {
-                let v = if run.instance.is_ok() { run.outputs[k] } else { f64::NAN };
-                io.set_at(port, j, v);
-                k += 1;
-            }
-        }
-    }
-
-    /// The inputs at this hit set, and one communication step from
-    /// offset + k·T (counted, not accumulated).
-    fn update(&mut self, io: &mut Io) {
-        if let Err(e) = self.ready() {
-            self.fail(e);
-            return;
-        }
-        let (period, offset) = (self.period, self.offset);
-        let Some(Run { instance: Ok(i), inputs, steps, .. }) = self.run.as_mut() else { return };
-        let mut k = 0;
-        for port in 0..io.num_inputs() {
-            let u = io.input(port);
-            inputs[k..k + u.len()].copy_from_slice(u);
-            k += u.len();
-        }
-        let t = offset + *steps as f64 * period;
-        match i.set(&self.input_refs, inputs).and_then(|()| i.do_step(t, period)) {
-            Ok(()) => *steps += 1,
-            Err(e) => self.fail(e),
-        }
-    }
-
-    fn diagnose(&self) -> Option<String> {
-        match self.run.as_ref().map(|r| &r.instance) {
-            Some(Err(e)) => Some(format!("the FMU ({}): {e}", self.at)),
-            _ => None,
-        }
-    }
-
-    fn not_linearizable(&self) -> Option<&'static str> {
-        Some("an FMU in co-simulation is a black box stepped at its sample time")
-    }
-
-    fn build_report(&self) -> Option<String> {
-        Some(self.report.clone())
-    }
-}
-
-impl FmuBlock {
-    /// Ends the instance with `error`: its outputs are NaN from now on, and
-    /// the run stops at them naming the block with this message.
-    fn fail(&mut self, error: String) {
-        if let Some(r) = self.run.as_mut() {
-            r.instance = Err(error);
-            r.pending = None;
-        }
+) -> (Result<binding::Instance, String>, Option<Vec<u8>>) {
+    let state = match (instance, pending) {
+        // A copy not yet used: its state, again.
+        (_, Some(bytes)) => Ok(bytes.clone()),
+        (Ok(i), None) if can_copy_state => i.serialize(),
+        (Ok(_), None) => Err("the FMU cannot save and restore its state (canGetAndSetFMUState or \
+                             canSerializeFMUState is false): a snapshot of this run cannot copy it"
+            .to_string()),
+        (Err(e), None) => Err(e.clone()),
+    };
+    match state {
+        Ok(bytes) => (Err(NOT_YET_RESTORED.to_string()), Some(bytes)),
+        Err(e) => (Err(e), None),
     }
 }
