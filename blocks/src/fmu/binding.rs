@@ -1,6 +1,7 @@
-//! An FMU's binary, loaded with `libloading`, and one co-simulation
-//! instance of it behind a version-neutral interface (FMI 3.0 §2.3, §4;
-//! FMI 2.0.4 §2.1, §4). Every status the FMU returns is checked: an error
+//! An FMU's binary, loaded with `libloading`, and one instance of it behind
+//! a version-neutral interface (FMI 3.0 §2.3, §4; FMI 2.0.4 §2.1, §4): the
+//! calls both interfaces share and co-simulation's; model exchange's own
+//! are `binding_me.rs`. Every status the FMU returns is checked: an error
 //! becomes a message with what the FMU logged, never a crash.
 
 #![allow(non_snake_case)]
@@ -269,14 +270,10 @@ pub struct Instance {
     _callbacks: Option<Box<Callbacks2>>,
 }
 
-// SAFETY: the instance is used by one block at a time (`&mut self` for
-// every call that reaches the FMU), which FMI allows from any thread: an
-// instance's calls must not overlap, not stay on one thread.
+// SAFETY: an instance is owned by one block of one run, behind a lock
+// (the blocks' `Mutex<Run>`), so its calls never overlap — all FMI asks:
+// an instance may be called from any thread, one call at a time.
 unsafe impl Send for Instance {}
-// SAFETY: no `&self` method calls the FMU but the state getters, which
-// FMI defines as reading the instance; a block's `&self` is shared only
-// while the run is not stepping.
-unsafe impl Sync for Instance {}
 
 /// Why a call failed: the function, the status, what the FMU logged.
 fn failure(what: &str, status: Status, messages: &Messages) -> String {

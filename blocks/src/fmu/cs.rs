@@ -6,7 +6,7 @@
 use super::binding::Instance;
 use super::{Loaded, NOT_YET_RESTORED, copy_of};
 use ctlgraph_core::{Block, Io};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// The block: the FMU (shared), the selected variables, and this run's
 /// instance.
@@ -27,7 +27,9 @@ pub struct FmuBlock {
     pub(super) offset: f64,
     pub(super) report: String,
     /// The run's instance, once initialised; `None` in the compiled model.
-    pub(super) run: Option<Run>,
+    /// Behind a lock only so that a copy (`&self`) may read the FMU's state;
+    /// the run's own calls go through `get_mut`, without locking.
+    pub(super) run: Option<Mutex<Run>>,
 }
 
 /// One run's FMU instance and where it is.
@@ -48,9 +50,10 @@ impl Clone for FmuBlock {
     /// state serialised now and restored into a new instance when the copy
     /// is first used.
     fn clone(&self) -> Self {
-        let run = self.run.as_ref().map(|r| {
+        let run = self.run.as_ref().map(|m| {
+            let r = m.lock().unwrap_or_else(|e| e.into_inner());
             let (instance, pending) = copy_of(&r.instance, &r.pending, self.can_copy_state);
-            Run { instance, steps: r.steps, pending, inputs: r.inputs.clone(), outputs: r.outputs.clone() }
+            Mutex::new(Run { instance, steps: r.steps, pending, inputs: r.inputs.clone(), outputs: r.outputs.clone() })
         });
         FmuBlock {
             name: self.name.clone(),
@@ -86,17 +89,17 @@ impl FmuBlock {
     /// Makes the run's instance ready: a copy's made and its state
     /// restored on first use.
     fn ready(&mut self) -> Result<(), String> {
-        let pending = match self.run.as_mut() {
+        let pending = match self.run.as_mut().map(|m| m.get_mut().unwrap_or_else(|e| e.into_inner())) {
             None => return Err("the block was not initialised (internal error)".to_string()),
             Some(r) => r.pending.take(),
         };
         if let Some(bytes) = pending {
             let made = self.instantiate().and_then(|mut i| i.deserialize(&bytes).map(|()| i));
-            if let Some(r) = self.run.as_mut() {
+            if let Some(r) = self.run.as_mut().map(|m| m.get_mut().unwrap_or_else(|e| e.into_inner())) {
                 r.instance = made;
             }
         }
-        match self.run.as_ref().map(|r| &r.instance) {
+        match self.run.as_mut().map(|m| m.get_mut().unwrap_or_else(|e| e.into_inner())).map(|r| &r.instance) {
             Some(Ok(_)) => Ok(()),
             Some(Err(e)) => Err(e.clone()),
             None => Err("no run".to_string()),
@@ -109,19 +112,21 @@ impl Block for FmuBlock {
         self.run = None; // the previous instance is freed first
         let instance = self.instantiate();
         let (inputs, outputs) = (vec![0.0; self.input_len], vec![0.0; self.output_len]);
-        self.run = Some(Run { instance, steps: 0, pending: None, inputs, outputs });
+        self.run = Some(Mutex::new(Run { instance, steps: 0, pending: None, inputs, outputs }));
     }
 
     /// The FMU's outputs at this hit (NaN once it failed).
     fn output(&mut self, io: &mut Io) {
-        let got = self.ready().and_then(|()| match self.run.as_mut() {
-            Some(Run { instance: Ok(i), outputs, .. }) => i.get(&self.output_refs, outputs),
-            _ => Err("no instance".to_string()),
+        let got = self.ready().and_then(|()| {
+            match self.run.as_mut().map(|m| m.get_mut().unwrap_or_else(|e| e.into_inner())) {
+                Some(Run { instance: Ok(i), outputs, .. }) => i.get(&self.output_refs, outputs),
+                _ => Err("no instance".to_string()),
+            }
         });
         if let Err(e) = got {
             self.fail(e);
         }
-        let Some(run) = self.run.as_ref() else { return };
+        let Some(run) = self.run.as_mut().map(|m| m.get_mut().unwrap_or_else(|e| e.into_inner())) else { return };
         let mut k = 0;
         for port in 0..io.num_outputs() {
             for j in 0..io.output_width(port) {
@@ -140,7 +145,11 @@ impl Block for FmuBlock {
             return;
         }
         let (period, offset) = (self.period, self.offset);
-        let Some(Run { instance: Ok(i), inputs, steps, .. }) = self.run.as_mut() else { return };
+        let Some(Run { instance: Ok(i), inputs, steps, .. }) =
+            self.run.as_mut().map(|m| m.get_mut().unwrap_or_else(|e| e.into_inner()))
+        else {
+            return;
+        };
         let mut k = 0;
         for port in 0..io.num_inputs() {
             let u = io.input(port);
@@ -155,8 +164,9 @@ impl Block for FmuBlock {
     }
 
     fn diagnose(&self) -> Option<String> {
-        match self.run.as_ref().map(|r| &r.instance) {
-            Some(Err(e)) if e != NOT_YET_RESTORED => Some(format!("the FMU ({}): {e}", self.at)),
+        let run = self.run.as_ref()?.lock().ok()?;
+        match &run.instance {
+            Err(e) if e != NOT_YET_RESTORED => Some(format!("the FMU ({}): {e}", self.at)),
             _ => None,
         }
     }
@@ -174,7 +184,7 @@ impl FmuBlock {
     /// Ends the instance with `error`: its outputs are NaN from now on, and
     /// the run stops at them naming the block with this message.
     fn fail(&mut self, error: String) {
-        if let Some(r) = self.run.as_mut() {
+        if let Some(r) = self.run.as_mut().map(|m| m.get_mut().unwrap_or_else(|e| e.into_inner())) {
             r.instance = Err(error);
             r.pending = None;
         }
