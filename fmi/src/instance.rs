@@ -182,11 +182,11 @@ impl Instance {
         if needs_run && self.mode == Mode::Instantiated {
             return Err("outputs and recorded signals are computed from initialisation mode on".to_string());
         }
-        let signals: Option<Vec<f64>> = match needs_run {
-            true => Some(self.ensure_run()?.sim.signals_now().map_err(|e| e.to_string())?.to_vec()),
-            false => None,
-        };
-        let time = self.run.as_ref().map_or(0.0, |r| r.sim.time());
+        if needs_run {
+            // Outputs computed at the present time, then read in place.
+            self.ensure_run()?.sim.signals_now().map_err(|e| e.to_string())?;
+        }
+        let (time, signals) = self.run.as_ref().map_or((0.0, &[][..]), |r| (r.sim.time(), r.sim.signals()));
         let mut k = 0;
         for &r in references {
             let v = self.variable(r)?;
@@ -196,9 +196,7 @@ impl Instance {
                 Place::Time => out[0] = time,
                 Place::Input { index, elements } => out.copy_from_slice(&self.inputs[*index][elements.clone()]),
                 Place::Parameter(i) => out[0] = self.parameters[*i],
-                Place::Signal { offset, width } => {
-                    out.copy_from_slice(&signals.as_deref().unwrap_or_default()[*offset..*offset + *width])
-                }
+                Place::Signal { offset, width } => out.copy_from_slice(&signals[*offset..*offset + *width]),
             }
             k += n;
         }
@@ -214,13 +212,15 @@ impl Instance {
         }
         let mut k = 0;
         for &r in references {
-            let v = self.variable(r)?.clone();
-            let given = &values[k..k + v.len()];
-            k += v.len();
+            // The place only (no allocation at a set); the variable again for a message.
+            let (place, len) = self.variable(r).map(|v| (v.place.clone(), v.len()))?;
+            let given = &values[k..k + len];
+            k += len;
             if let Some(bad) = given.iter().find(|x| !x.is_finite()) {
+                let v = self.variable(r)?;
                 return Err(format!("{} `{}`: {bad} is not a finite number", v.causality.text(), v.name));
             }
-            match v.place {
+            match place {
                 Place::Input { index, elements } => {
                     self.inputs[index][elements].copy_from_slice(given);
                     if let Some(run) = self.run.as_mut() {
@@ -231,6 +231,7 @@ impl Instance {
                 }
                 Place::Parameter(i) => {
                     if !matches!(self.mode, Mode::Instantiated | Mode::Initialization) {
+                        let v = self.variable(r)?;
                         return Err(format!(
                             "parameter `{}` is fixed after initialisation (it is compiled into the blocks): \
                              set it before exitInitializationMode, or reset the instance",
@@ -240,6 +241,7 @@ impl Instance {
                     self.parameters[i] = given[0];
                 }
                 Place::Time | Place::Signal { .. } => {
+                    let v = self.variable(r)?;
                     return Err(format!(
                         "`{}` is {} a {}: only inputs and parameters are set",
                         v.name,
