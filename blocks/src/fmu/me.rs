@@ -14,9 +14,9 @@
 //! depend on its inputs directly).
 
 use super::binding::Instance;
-use super::{Loaded, NOT_YET_RESTORED, copy_of};
+use super::{Common, copy_of};
 use ctlgraph_core::{Block, Io};
-use std::sync::{Arc, Mutex};
+use std::sync::Mutex;
 
 /// The block: what it was built with, and this run's instance.
 #[derive(Clone)]
@@ -31,23 +31,13 @@ pub struct MeBlock {
     pub(super) run: Option<Copied>,
 }
 
-/// What the block was built with.
+/// What the block was built with: the common part, and the FMU's counts
+/// of continuous states and event indicators.
 #[derive(Clone)]
 pub(super) struct Shared {
-    pub name: String,
-    /// `file:line:col` of the block, for errors at run time.
-    pub at: String,
-    pub token: String,
-    pub can_copy_state: bool,
-    pub loaded: Arc<Loaded>,
-    pub input_refs: Vec<u32>,
-    pub input_len: usize,
-    pub output_refs: Vec<u32>,
-    pub output_len: usize,
-    pub parameters: Vec<(u32, Vec<f64>)>,
+    pub common: Common,
     pub n_states: usize,
     pub n_indicators: usize,
-    pub report: String,
 }
 
 pub(super) struct Run {
@@ -78,12 +68,7 @@ impl Shared {
     /// A new instance, its parameters set, initialised and settled; its
     /// initial states into `x0` (when given) and its next time event.
     pub(super) fn instantiate(&self, x0: Option<&mut [f64]>) -> Result<(Instance, f64), String> {
-        let mut i = Instance::new(&self.loaded.binary, &self.name, &self.token, &self.loaded.resources)?;
-        i.enter_initialization(0.0)?;
-        for (reference, values) in &self.parameters {
-            i.set(&[*reference], values)?;
-        }
-        i.exit_initialization()?;
+        let mut i = self.common.instance(0.0)?;
         i.check_counts(self.n_states, self.n_indicators)?;
         // Initialisation ends in event mode (FMI 3.0 §3.2.1; FMI 2 likewise).
         let settled = i.settle()?;
@@ -119,7 +104,7 @@ impl Shared {
         let result = match instance.as_mut() {
             Ok(i) => i
                 .set_time_and_states(io.t, x)
-                .and_then(|()| i.set(&self.input_refs, inputs))
+                .and_then(|()| i.set(&self.common.input_refs, inputs))
                 .and_then(|()| f(i, outputs)),
             Err(e) => Err(e.clone()),
         };
@@ -150,14 +135,14 @@ impl Block for MeBlock {
             Err(e) => (Err(e), f64::INFINITY),
         };
         self.next_time = next;
-        let (inputs, outputs) = (vec![0.0; self.shared.input_len], vec![0.0; self.shared.output_len]);
+        let (inputs, outputs) = (vec![0.0; self.shared.common.input_len], vec![0.0; self.shared.common.output_len]);
         let run = Mutex::new(Run { instance, pending: None, inputs, outputs });
-        self.run = Some(Copied { run, can_copy_state: self.shared.can_copy_state });
+        self.run = Some(Copied { run, can_copy_state: self.shared.common.can_copy_state });
     }
 
     fn output(&mut self, io: &mut Io) {
         let Some((shared, run)) = self.run_mut() else { return };
-        let refs = &shared.output_refs;
+        let refs = &shared.common.output_refs;
         let ok = shared.with(run, io, io.x, |i, outputs| i.get(refs, outputs)).is_ok();
         let mut k = 0;
         for port in 0..io.num_outputs() {
@@ -237,15 +222,10 @@ impl Block for MeBlock {
     }
 
     fn diagnose(&self) -> Option<String> {
-        let run = self.run.as_ref()?.run.lock().ok()?;
-        run.instance
-            .as_ref()
-            .err()
-            .filter(|e| *e != NOT_YET_RESTORED)
-            .map(|e| format!("the FMU ({}): {e}", self.shared.at))
+        self.shared.common.diagnose(&self.run.as_ref()?.run.lock().ok()?.instance)
     }
 
     fn build_report(&self) -> Option<String> {
-        Some(self.shared.report.clone())
+        Some(self.shared.common.report.clone())
     }
 }

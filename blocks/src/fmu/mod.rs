@@ -112,34 +112,26 @@ fn build_fmu(p: &mut Params) -> Result<Built, Diagnostic> {
     let inputs = select(p, d, "inputs", Causality::Input)?;
     let outputs = select(p, d, "outputs", Causality::Output)?;
     let parameters = parameters(p, d)?;
-    let refs = |ports: &[Port]| ports.iter().map(|p| p.reference).collect::<Vec<_>>();
-    // Where the block is written, for the errors the FMU gives at run time.
-    let at = p.block_error("").pos.map(|pos| pos.to_string()).unwrap_or_default();
-    let len = |ports: &[Port]| ports.iter().map(|p| p.size).sum::<usize>();
+    let common = Common {
+        name: p.block_name().to_string(),
+        // Where the block is written, for the errors the FMU gives at run time.
+        at: p.block_error("").pos.map(|pos| pos.to_string()).unwrap_or_default(),
+        token: d.token.clone(),
+        can_copy_state: loaded.can_copy_state,
+        input_refs: inputs.iter().map(|p| p.reference).collect(),
+        input_len: inputs.iter().map(|p| p.size).sum(),
+        output_refs: outputs.iter().map(|p| p.reference).collect(),
+        output_len: outputs.iter().map(|p| p.size).sum(),
+        parameters,
+        report: String::new(),
+        loaded: Arc::new(loaded),
+    };
+    let d = &common.loaded.description;
     if me {
         let interface = d.model_exchange.as_ref().ok_or_else(|| no_interface(p, &path, "model exchange"))?;
-        let mut iface = Interface::new(ctlgraph_core::SampleTime::Continuous);
-        for port in &inputs {
-            iface = iface.input(&port.name, Width::Fixed(port.size), true);
-        }
-        for port in &outputs {
-            iface = iface.output(&port.name, Width::Fixed(port.size));
-        }
-        let shared = me::Shared {
-            name: p.block_name().to_string(),
-            at,
-            token: d.token.clone(),
-            can_copy_state: loaded.can_copy_state,
-            input_refs: refs(&inputs),
-            input_len: len(&inputs),
-            output_refs: refs(&outputs),
-            output_len: len(&outputs),
-            parameters,
-            n_states: interface.states,
-            n_indicators: interface.event_indicators,
-            report: report(d, &path, None),
-            loaded: Arc::new(loaded),
-        };
+        let (n_states, n_indicators) = (interface.states, interface.event_indicators);
+        let iface = interface_of(ctlgraph_core::SampleTime::Continuous, &inputs, &outputs, true);
+        let shared = me::Shared { common: Common { report: report(d, &path, None), ..common }, n_states, n_indicators };
         // Instantiated and initialised once now, so that what fails there
         // (the parameters, the FMU's own checks) is reported at the block.
         if let Err(e) = shared.instantiate(None) {
@@ -157,33 +149,65 @@ fn build_fmu(p: &mut Params) -> Result<Built, Diagnostic> {
             .ok_or_else(|| p.block_error("the FMU gives no DefaultExperiment stepSize: set `sample_time: T`"))?;
         (ctlgraph_core::SampleTime::Discrete { period: step, offset: 0.0 }, step, 0.0)
     };
-    let mut iface = Interface::new(st);
-    for port in &inputs {
-        iface = iface.input(&port.name, Width::Fixed(port.size), false);
-    }
-    for port in &outputs {
-        iface = iface.output(&port.name, Width::Fixed(port.size));
-    }
-    let block = FmuBlock {
-        name: p.block_name().to_string(),
-        at,
-        token: d.token.clone(),
-        can_copy_state: loaded.can_copy_state,
-        input_refs: refs(&inputs),
-        input_len: len(&inputs),
-        output_refs: refs(&outputs),
-        output_len: len(&outputs),
-        parameters,
-        period,
-        offset,
-        report: report(d, &path, Some(period)),
-        loaded: Arc::new(loaded),
-        run: None,
-    };
-    if let Err(e) = block.instantiate() {
+    let common = Common { report: report(d, &path, Some(period)), ..common };
+    let block = FmuBlock { common, period, offset, run: None };
+    if let Err(e) = block.common.instance(offset) {
         return Err(at_initialisation(p, e));
     }
-    Ok(Built::new(block, iface.piecewise_constant()))
+    Ok(Built::new(block, interface_of(st, &inputs, &outputs, false).piecewise_constant()))
+}
+
+/// The block's ports: the selected inputs (feeding through or not) and outputs.
+fn interface_of(st: ctlgraph_core::SampleTime, inputs: &[Port], outputs: &[Port], feedthrough: bool) -> Interface {
+    let mut iface = Interface::new(st);
+    for port in inputs {
+        iface = iface.input(&port.name, Width::Fixed(port.size), feedthrough);
+    }
+    for port in outputs {
+        iface = iface.output(&port.name, Width::Fixed(port.size));
+    }
+    iface
+}
+
+/// What a block of either mode was built with.
+#[derive(Clone)]
+pub(super) struct Common {
+    pub name: String,
+    /// `file:line:col` of the block, for errors at run time.
+    pub at: String,
+    pub token: String,
+    /// Whether the FMU can copy its state (what a snapshot of a run needs).
+    pub can_copy_state: bool,
+    pub loaded: Arc<Loaded>,
+    /// The selected variables' value references, and how many numbers they hold.
+    pub input_refs: Vec<u32>,
+    pub input_len: usize,
+    pub output_refs: Vec<u32>,
+    pub output_len: usize,
+    pub parameters: Vec<(u32, Vec<f64>)>,
+    /// What `ctlgraph check` prints.
+    pub report: String,
+}
+
+impl Common {
+    /// A new instance from `start`, its parameters set and initialised.
+    pub fn instance(&self, start: f64) -> Result<binding::Instance, String> {
+        let mut i = binding::Instance::new(&self.loaded.binary, &self.name, &self.token, &self.loaded.resources)?;
+        i.enter_initialization(start)?;
+        for (reference, values) in &self.parameters {
+            i.set(&[*reference], values)?;
+        }
+        i.exit_initialization()?;
+        Ok(i)
+    }
+
+    /// Why the block's output is NaN, when its instance failed.
+    pub fn diagnose(&self, instance: &Result<binding::Instance, String>) -> Option<String> {
+        match instance {
+            Err(e) if e != NOT_YET_RESTORED => Some(format!("the FMU ({}): {e}", self.at)),
+            _ => None,
+        }
+    }
 }
 
 /// An instantiation or initialisation that failed while building: at the
