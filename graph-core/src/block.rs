@@ -420,6 +420,14 @@ pub trait Block: std::any::Any + Send + Sync + dyn_clone::DynClone {
         None
     }
 
+    /// The block's C form for `ctlgraph codegen --target c` ([`crate::codegen::c`]):
+    /// its memory, reset, output and update as C99 statements written into
+    /// `c`, the same operations in the same order as `output` and `update`
+    /// (so the C gives the simulation's bits). The default: the type has none.
+    fn c_form(&self, _c: &mut crate::codegen::c::CBlock) -> Result<(), crate::codegen::c::NoCForm> {
+        Err(crate::codegen::c::NoCForm::Type)
+    }
+
     /// Runs at every major step after all outputs, for continuous blocks
     /// that [`Block::needs_major_step`]: the block may switch modes that
     /// depend on inputs without feedthrough, and reset its continuous states

@@ -35,7 +35,8 @@ pub struct Scope {
     pub band: Option<[f64; 2]>,
 }
 
-const KEYS: [&str; 7] = ["title", "signals", "y_label", "unit", "y_limits", "window", "band"];
+/// The keys of a scope.
+pub const KEYS: [&str; 7] = ["title", "signals", "y_label", "unit", "y_limits", "window", "band"];
 
 /// Parses the `scopes:` list.
 pub fn parse(v: &Yaml) -> Result<Vec<ScopeSpec>, Diagnostic> {

@@ -8,7 +8,8 @@ use crate::scope::{self, ScopeSpec};
 use crate::yaml::{self, Key, Kind, Yaml};
 use std::sync::Arc;
 
-const TOP_KEYS: [&str; 10] =
+/// The keys of a graph file.
+pub const TOP_KEYS: [&str; 10] =
     ["name", "description", "parameters", "simulation", "blocks", "wires", "record", "checks", "scopes", "analysis"];
 
 /// One graph file.
@@ -51,7 +52,8 @@ pub struct Selection {
     pub pos: Option<Pos>,
 }
 
-const ANALYSIS_KEYS: [&str; 4] = ["input", "output", "open", "at"];
+/// The keys of `analysis:`.
+pub const ANALYSIS_KEYS: [&str; 4] = ["input", "output", "open", "at"];
 
 fn parse_analysis(v: &Yaml) -> Result<Selection, Diagnostic> {
     let map = v.expect_map("`analysis`")?;

@@ -18,6 +18,7 @@
 //! the values the graph gives them: a generated run has no `set_input`
 //! (stepping a graph from a host is the interpreter's, `sim/host.rs`).
 
+pub mod c;
 mod driver;
 mod emit;
 pub mod export;

@@ -112,8 +112,9 @@ pub struct Model {
     /// [`crate::checks::metrics::LoopFigure`] (filled in by whoever can
     /// linearise: `ctlgraph::compile_flat`).
     pub loop_figures: Option<Vec<f64>>,
-    /// Top-level subsystem ports by name (`sub.port`, `sub`) and the real
-    /// signal on each (for analysis selections and `Simulator::signal`).
+    /// Subsystem ports by name (`sub.port`, `sub`, `outer/inner.port`) and
+    /// the real signal on each (for analysis selections, `Simulator::signal`
+    /// and a controller's terminals in `codegen --target c`).
     pub subsystem_ports: Vec<(String, Port)>,
     /// The graph's own inputs, its top-level `inport` blocks: name and
     /// block index (see [`crate::Simulator::set_input`]).

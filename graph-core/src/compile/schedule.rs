@@ -60,7 +60,7 @@ pub(super) fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>
     let text: Vec<String> = loops.iter().map(|l| format!("{} -> {}", l.join(" -> "), l[0])).collect();
     let message = format!("algebraic loop: {}", text.join("; "));
     let hint = "every block on the loop has direct feedthrough; break it with a block that has none \
-                (unit_delay, integrator, a strictly proper transfer_function, an observer)";
+                (unit_delay, memory, integrator, a strictly proper transfer_function, an observer)";
     Err(match pos {
         Some(p) => Diagnostic::at(&p, message),
         None => Diagnostic::plain(message),

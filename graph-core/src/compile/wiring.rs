@@ -226,9 +226,10 @@ pub(super) fn set_common_width(flat: &FlatBlock, block: &mut dyn Block, width: u
 
 /// The columns of the output: the `record:` list, or by default every
 /// output of every top-level block.
-/// The real signal on each port of a top-level subsystem, by the names a
-/// user writes: `sub.port` (an inport: the signal wired to it; an outport:
-/// the signal it exports), and `sub` for a subsystem with one outport.
+/// The real signal on each port of a subsystem, by the names a user
+/// writes: `sub.port` (an inport: the signal wired to it; an outport: the
+/// signal it exports), and `sub` for a subsystem with one outport; a
+/// nested subsystem by its path (`loop/ctrl.u`).
 pub(super) fn subsystem_ports(
     g: &FlatGraph,
     nodes: &[Node],
@@ -237,7 +238,7 @@ pub(super) fn subsystem_ports(
     out_offset: &[Vec<Port>],
 ) -> Vec<(String, Port)> {
     let mut named = Vec::new();
-    for (sub, (ins, outs)) in g.subsystems.iter().filter(|(s, _)| !s.contains('/')) {
+    for (sub, (ins, outs)) in &g.subsystems {
         for port in ins.iter().chain(outs) {
             let Some(&(mut src)) = index.get(format!("{sub}/{port}").as_str()) else { continue };
             let mut p = 0;

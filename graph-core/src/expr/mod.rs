@@ -15,6 +15,8 @@
 //! Parsing resolves every name once, to a constant or to a variable slot, so
 //! evaluation does no lookups and allocates nothing.
 
+mod c;
+
 use std::fmt;
 
 /// What a name stands for.

@@ -69,10 +69,12 @@ pub enum ZeroCrossing {
     Adaptive,
 }
 
-const SIM_KEYS: [&str; 5] = ["stop", "solver", "seed", "output", "accelerate"];
-const SOLVER_KEYS: [&str; 8] =
+/// The keys of `simulation:`, of its `solver:`, and the solver methods
+/// (also what `ctlgraph schema` describes).
+pub const SIM_KEYS: [&str; 5] = ["stop", "solver", "seed", "output", "accelerate"];
+pub const SOLVER_KEYS: [&str; 8] =
     ["method", "step", "rtol", "atol", "max_step", "initial_step", "zero_crossing", "exact_lti"];
-const METHODS: [&str; 5] = ["dopri5", "trbdf2", "rk4", "heun", "euler"];
+pub const METHODS: [&str; 5] = ["dopri5", "trbdf2", "rk4", "heun", "euler"];
 
 pub(super) fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<SimConfig, Diagnostic> {
     let entries = match sim {

@@ -260,7 +260,7 @@ impl<'a> Params<'a> {
     /// A list of numbers, else the table's default (a number is a list of
     /// one); `None` when the table gives none.
     pub fn opt_vector(&mut self, key: &str) -> Result<Option<Vec<f64>>, Diagnostic> {
-        self.expect_kind(key, &[ParamKind::Number, ParamKind::Numbers]);
+        self.expect_kind(key, &[ParamKind::Numbers, ParamKind::Matrix]);
         match self.raw(key) {
             Some(v) if v.kind != Kind::Null => self.vector_value(key, v).map(Some),
             _ => match self.default_of(key) {
@@ -298,7 +298,7 @@ impl<'a> Params<'a> {
 
     /// A matrix as a list of rows; a list of numbers is one row, a number a 1×1.
     pub fn matrix(&mut self, key: &str) -> Result<Vec<Vec<f64>>, Diagnostic> {
-        self.expect_kind(key, &[ParamKind::Number, ParamKind::Numbers, ParamKind::Matrix]);
+        self.expect_kind(key, &[ParamKind::Matrix]);
         let Some(v) = self.raw(key) else {
             return Err(self.missing(key));
         };
@@ -314,7 +314,7 @@ impl<'a> Params<'a> {
     /// A polynomial as a list of coefficients, or a product of polynomials
     /// as a list of such lists (one factor each).
     pub fn polynomial_factors(&mut self, key: &str) -> Result<Vec<Vec<f64>>, Diagnostic> {
-        self.expect_kind(key, &[ParamKind::Number, ParamKind::Numbers, ParamKind::Matrix]);
+        self.expect_kind(key, &[ParamKind::Matrix]);
         let Some(v) = self.raw(key) else {
             return Err(self.missing(key));
         };
@@ -329,7 +329,7 @@ impl<'a> Params<'a> {
     /// A list whose items are numbers or `[re, im]` pairs (a complex
     /// number, standing for itself and its conjugate).
     pub fn roots(&mut self, key: &str) -> Result<Vec<(f64, f64)>, Diagnostic> {
-        self.expect_kind(key, &[ParamKind::Number, ParamKind::Numbers]);
+        self.expect_kind(key, &[ParamKind::Matrix]);
         let Some(v) = self.raw(key) else {
             return Ok(Vec::new());
         };
@@ -398,6 +398,14 @@ impl<'a> Params<'a> {
     /// One of `options`; the default is the table's word (for a block
     /// without a table, the first option).
     pub fn choice(&mut self, key: &str, options: &[&'static str]) -> Result<&'static str, Diagnostic> {
+        if let Some(entry) = self.declared(key) {
+            debug_assert!(
+                entry.options == options,
+                "block type `{}` reads `{key}` as one of {options:?}, but its table declares {:?}",
+                self.type_name,
+                entry.options
+            );
+        }
         let given = self.has(key);
         let s = match self.opt_string(key)? {
             Some(s) => s,

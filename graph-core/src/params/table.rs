@@ -14,6 +14,10 @@ pub struct ParamDoc {
     /// The unit of its value ("s", "rad/s", "mm"), or "" for none.
     pub unit: &'static str,
     pub doc: &'static str,
+    /// A word's options, empty for other kinds and free words: what
+    /// [`super::Params::choice`] accepts (a debug build checks that the
+    /// block asks for these), and the schema's enum.
+    pub options: &'static [&'static str],
 }
 
 impl ParamDoc {
@@ -27,7 +31,7 @@ impl ParamDoc {
             ParamDefault::Word(_) => ParamKind::Word,
             ParamDefault::Required | ParamDefault::Described(_) => ParamKind::Text,
         };
-        ParamDoc { name, kind, default, unit: "", doc }
+        ParamDoc { name, kind, default, unit: "", doc, options: &[] }
     }
 
     /// The same parameter, of `kind`.
@@ -38,6 +42,11 @@ impl ParamDoc {
     /// The same parameter, its value in `unit`.
     pub const fn unit(self, unit: &'static str) -> Self {
         ParamDoc { unit, ..self }
+    }
+
+    /// The same parameter, a word out of `options`.
+    pub const fn options(self, options: &'static [&'static str]) -> Self {
+        ParamDoc { options, ..self }
     }
 }
 
@@ -82,7 +91,8 @@ pub enum ParamKind {
     Number,
     /// A list of numbers (one number is a list of one).
     Numbers,
-    /// A list of rows of numbers.
+    /// A list of rows of numbers (a list is one row, a number a 1×1), or
+    /// of numbers and pairs (roots).
     Matrix,
     /// true or false.
     Flag,

@@ -8,7 +8,8 @@ const TABLE: &[ParamDoc] = &[
     ParamDoc::new("gain", Number(2.5), "a gain"),
     ParamDoc::new("tau", Required, "a time constant").unit("s").kind(ParamKind::Number),
     ParamDoc::new("initial", Numbers(&[1.0, -1.0]), "x(0)"),
-    ParamDoc::new("mode", Word("fast"), "fast | slow"),
+    ParamDoc::new("mode", Word("fast"), "fast | slow").options(&["slow", "fast"]),
+    ParamDoc::new("weights", Number(0.5), "one weight, or one per element").kind(ParamKind::Numbers),
     ParamDoc::new("hold", Flag(true), "hold the input"),
     ParamDoc::new("h0", Described("2·sample_time"), "a filter factor").kind(ParamKind::Number),
     ParamDoc::new("sample_time", Number(0.0), "0 continuous, T > 0 discrete").kind(ParamKind::SampleTime),
@@ -32,8 +33,8 @@ fn a_parameter_left_out_takes_the_tables_default_of_the_kind_asked() {
         assert_eq!(p.choice("mode", &["slow", "fast"]).unwrap(), "fast");
         assert!(p.flag("hold").unwrap());
         assert_eq!(p.sample_time().unwrap(), SampleTime::Continuous);
-        // A number default is a list of one where a list is asked for.
-        assert_eq!(p.vector("gain").unwrap(), vec![2.5]);
+        // A number default of a list is a list of one.
+        assert_eq!(p.vector("weights").unwrap(), vec![0.5]);
         assert_eq!(p.number("tau").unwrap(), 0.1);
     });
 }
@@ -117,8 +118,8 @@ fn a_block_reading_a_key_its_table_does_not_list_stops_a_debug_build() {
 #[test]
 fn the_documentation_prints_each_default_as_a_graph_writes_it() {
     let shown: Vec<String> = TABLE.iter().map(|d| d.default.to_string()).collect();
-    assert_eq!(shown, ["2.5", "required", "[1, -1]", "fast", "true", "2·sample_time", "0"]);
+    assert_eq!(shown, ["2.5", "required", "[1, -1]", "fast", "0.5", "true", "2·sample_time", "0"]);
     assert_eq!(TABLE[1].unit, "s");
     let kinds: Vec<&str> = TABLE.iter().map(|d| d.kind.name()).collect();
-    assert_eq!(kinds, ["number", "number", "numbers", "word", "flag", "number", "sample time"]);
+    assert_eq!(kinds, ["number", "number", "numbers", "word", "numbers", "flag", "number", "sample time"]);
 }

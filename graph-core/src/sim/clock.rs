@@ -16,11 +16,17 @@ pub(super) struct Grid {
     per_unit: Option<f64>,
 }
 
+/// The whole number n with step = 1/n (to a few ulps), when there is one:
+/// then the grid's times are k/n (see [`Grid`]).
+pub(crate) fn per_unit(step: f64) -> Option<f64> {
+    let n = (1.0 / step).round();
+    let exact = step > 0.0 && (1.0..9e15).contains(&n) && (n * step - 1.0).abs() <= 4.0 * f64::EPSILON;
+    exact.then_some(n)
+}
+
 impl Grid {
     fn new(step: f64) -> Self {
-        let n = (1.0 / step).round();
-        let exact = step > 0.0 && (1.0..9e15).contains(&n) && (n * step - 1.0).abs() <= 4.0 * f64::EPSILON;
-        Grid { step, per_unit: exact.then_some(n) }
+        Grid { step, per_unit: per_unit(step) }
     }
 
     fn time(&self, k: u64) -> f64 {

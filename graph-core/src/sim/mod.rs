@@ -12,7 +12,7 @@
 
 mod blame;
 mod breakpoints;
-mod clock;
+pub(crate) mod clock;
 pub(crate) mod driver;
 mod error;
 pub(crate) mod events;
@@ -245,6 +245,13 @@ impl Simulator {
     /// ([`Clockwork::expected_major_steps`]).
     pub fn expected_major_steps(&self) -> f64 {
         self.state.clockwork.expected_major_steps()
+    }
+
+    /// Whether the current major step is a sample hit of the discrete rate
+    /// `clock` (an index into [`Model::clocks`]): what a sampled part of
+    /// the graph sees at this step (recorded for `codegen --target c --verify`).
+    pub fn sample_hit(&self, clock: usize) -> bool {
+        self.state.clockwork.hit.get(clock).copied().unwrap_or(false)
     }
 
     /// Whether the run has reached its stop time.
