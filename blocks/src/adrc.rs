@@ -4,6 +4,7 @@
 
 use crate::math::sign;
 use crate::table::*;
+use ctlgraph_core::codegen::c::{CBlock, NoCForm, Real};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
@@ -36,7 +37,8 @@ pub const TYPES: &[BlockType] = &[
             param("h0", Described("2·sample_time"), "filter factor h0 > 0; >= 2·sample_time avoids overshoot")
                 .kind(ParamKind::Number)
                 .unit("s"),
-            param("form", Word("fst"), "fst (Han's, c = x1 + h0·x2) | paper (eq. 7 as printed, c = x1 + h·x2) | fhan"),
+            param("form", Word("fst"), "fst (Han's, c = x1 + h0·x2) | paper (eq. 7 as printed, c = x1 + h·x2) | fhan")
+                .options(&["fst", "paper", "fhan"]),
             param("c_step", Described("h0"), "the step in c = x1 + c_step·x2 of fst (paper: h); > 0")
                 .kind(ParamKind::Number)
                 .unit("s"),
@@ -67,7 +69,7 @@ pub const TYPES: &[BlockType] = &[
             param("omega", Required, "observer bandwidth ω (or give `beta`)").kind(ParamKind::Number).unit("rad/s"),
             param("beta", Required, "explicit gains [β1 … β_{n+1}] instead of ω").kind(ParamKind::Numbers),
             param("b0", Required, "input gain estimate b0").kind(ParamKind::Number),
-            param("initial", Number(0.0), "z(0): a number or n+1 numbers"),
+            param("initial", Number(0.0), "z(0): a number or n+1 numbers").kind(ParamKind::Numbers),
             param("sample_time", Number(0.0), "0 continuous, h > 0 discrete (forward Euler)")
                 .kind(ParamKind::SampleTime),
         ],
@@ -130,6 +132,43 @@ pub fn fhan(x1: f64, x2: f64, r: f64, h0: f64) -> f64 {
     -r * (a / d - sign(a)) * sa - r * sign(a)
 }
 
+/// [`fst`] in C, the same operations in the same order.
+fn c_fst(c: &mut CBlock) -> &'static str {
+    let sign = c.sign();
+    c.helper("ctl_fst", |r: Real| {
+        let (t, abs, sqrt) = (r.c_type(), r.math("fabs"), r.math("sqrt"));
+        let (two, eight) = (r.literal(2.0), r.literal(8.0));
+        format!(
+            "/* Han's time-optimal synthesis function fst(x1, x2, delta, h0), c = x1 + c_step x2 */\n\
+             static {t} ctl_fst({t} x1, {t} x2, {t} delta, {t} h0, {t} c_step)\n{{\n\
+             \x20   {t} d = delta * h0;\n    {t} d0 = h0 * d;\n    {t} c = x1 + c_step * x2;\n\
+             \x20   {t} a0 = {sqrt}(d * d + {eight} * delta * {abs}(c));\n\
+             \x20   {t} a = {abs}(c) > d0 ? x2 + (a0 - d) / {two} * {sign}(c) : x2 + c / h0;\n\
+             \x20   return {abs}(a) > d ? -delta * {sign}(a) : -delta * a / d;\n}}\n"
+        )
+    })
+}
+
+/// [`fhan`] in C, the same operations in the same order.
+fn c_fhan(c: &mut CBlock) -> &'static str {
+    let sign = c.sign();
+    c.helper("ctl_fhan", |r: Real| {
+        let (t, abs, sqrt) = (r.c_type(), r.math("fabs"), r.math("sqrt"));
+        let (two, eight) = (r.literal(2.0), r.literal(8.0));
+        format!(
+            "/* Han's fhan(x1, x2, r, h0) (Han 2009, eq. 21) */\n\
+             static {t} ctl_fhan({t} x1, {t} x2, {t} r, {t} h0)\n{{\n\
+             \x20   {t} d = r * h0 * h0;\n    {t} a0 = h0 * x2;\n    {t} y = x1 + a0;\n\
+             \x20   {t} a1 = {sqrt}(d * (d + {eight} * {abs}(y)));\n\
+             \x20   {t} a2 = a0 + {sign}(y) * (a1 - d) / {two};\n\
+             \x20   {t} sy = ({sign}(y + d) - {sign}(y - d)) / {two};\n\
+             \x20   {t} a = (a0 + y - a2) * sy + a2;\n\
+             \x20   {t} sa = ({sign}(a + d) - {sign}(a - d)) / {two};\n\
+             \x20   return -r * (a / d - {sign}(a)) * sa - r * {sign}(a);\n}}\n"
+        )
+    })
+}
+
 /// The discrete tracking differentiator.
 #[derive(Clone)]
 pub struct TrackingDifferentiator {
@@ -179,6 +218,29 @@ impl Block for TrackingDifferentiator {
     #[inline(always)]
     fn update(&mut self, io: &mut Io) {
         self.step(io.u(0));
+    }
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        let f = if self.fhan { c_fhan(c) } else { c_fst(c) };
+        c.equation("r1(k+1) = r1(k) + h r2(k),  r2(k+1) = r2(k) + h F(r1(k) - r(k), r2(k))");
+        c.equation(if self.fhan {
+            "F = fhan(x1, x2, delta, h0)"
+        } else {
+            "F = fst(x1, x2, delta, h0), c = x1 + c_step x2"
+        });
+        let r1 = c.state("r1", &[self.initial]);
+        let r2 = c.state("r2", &[0.0]);
+        c.output(format!("{} = {r1};", c.y(0)));
+        c.output(format!("{} = {r2};", c.y(1)));
+        let args = if self.fhan {
+            format!("{}, {}", c.num(self.delta), c.num(self.h0))
+        } else {
+            format!("{}, {}, {}", c.num(self.delta), c.num(self.h0), c.num(self.c_step))
+        };
+        let h = c.num(self.h);
+        c.update(format!("{real} f = {f}({r1} - {u}, {r2}, {args});", real = c.real(), u = c.u(0)));
+        c.update(format!("{r1} += {h} * {r2};"));
+        c.update(format!("{r2} += {h} * f;"));
+        Ok(())
     }
 }
 
@@ -341,6 +403,36 @@ impl Block for Leso {
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
         self.derivative(io.x, io.u(0), io.u(1), dx);
     }
+    /// The forward-Euler step of [`Leso::step`], unrolled.
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        if self.h <= 0.0 {
+            return Err(NoCForm::Because("a continuous LESO: give it a sample_time".into()));
+        }
+        let n = self.beta.len();
+        c.equation(
+            "e = z1 - y;  z_i += h (z_{i+1} - beta_i e) (i < n, plus b0 u at i = n);  z_{n+1} += h (-beta_{n+1} e)",
+        );
+        let z = c.state("z", &self.initial);
+        for k in 0..n {
+            c.output(format!("{} = {z}[{k}];", c.y_at(0, k)));
+        }
+        let real = c.real();
+        c.update(format!("{real} e = {z}[0] - {};", c.u(0)));
+        for i in 0..n - 1 {
+            let mut d = format!("{z}[{}] - {} * e", i + 1, c.num(self.beta[i]));
+            if i == n - 2 {
+                // dz[n-2] += b0·u: the sum's rounding, then the addition's.
+                d = format!("({d}) + {} * {}", c.num(self.b0), c.u(1));
+            }
+            c.update(format!("{real} d{i} = {d};"));
+        }
+        c.update(format!("{real} d{} = -{} * e;", n - 1, c.num(self.beta[n - 1])));
+        let h = c.num(self.h);
+        for i in 0..n {
+            c.update(format!("{z}[{i}] += {h} * d{i};"));
+        }
+        Ok(())
+    }
 }
 
 fn build_leso(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -396,6 +488,27 @@ impl Block for Lsef {
             a[0] * e1 - z[1] / self.b0
         };
         io.set(0, u.clamp(self.lower, self.upper));
+    }
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        let a: Vec<String> =
+            (0..2).map(|i| self.alpha_ports[i].map_or(c.num(self.alpha[i]), |p| c.u(p).to_string())).collect();
+        let z: Vec<String> = (0..=self.order).map(|k| c.u_at(self.z_port, k).to_string()).collect();
+        let b0 = c.num(self.b0);
+        let u = if self.order == 2 {
+            c.equation("u = alpha1 (r1 - z1) + alpha2 (r2 - z2) - z3 / b0, limited to [lower, upper]");
+            format!("{} * ({} - {}) + {} * ({} - {}) - {} / {b0}", a[0], c.u(0), z[0], a[1], c.u(1), z[1], z[2])
+        } else {
+            c.equation("u = alpha1 (r1 - z1) - z2 / b0, limited to [lower, upper]");
+            format!("{} * ({} - {}) - {} / {b0}", a[0], c.u(0), z[0], z[1])
+        };
+        let u = if self.lower == f64::NEG_INFINITY && self.upper == f64::INFINITY {
+            u
+        } else {
+            let clamp = c.clamp();
+            format!("{clamp}({u}, {}, {})", c.num(self.lower), c.num(self.upper))
+        };
+        c.output(format!("{} = {u};", c.y(0)));
+        Ok(())
     }
 }
 

@@ -5,6 +5,7 @@
 
 use crate::continuous::initial_vector;
 use crate::{SAMPLE_TIME_REQUIRED, U_ANY, Y_SAME, table::*};
+use ctlgraph_core::codegen::c::{CBlock, NoCForm};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Breakpoint, Diagnostic, Interface, Io, Params, SampleTime, Width};
 use std::collections::VecDeque;
@@ -99,7 +100,8 @@ pub const TYPES: &[BlockType] = &[
         outputs: Y_SAME,
         params: &[
             param("samples", Number(1.0), "N, a whole number >= 1"),
-            param("initial", Number(0.0), "output of the first N samples: a number or one per element"),
+            param("initial", Number(0.0), "output of the first N samples: a number or one per element")
+                .kind(ParamKind::Numbers),
             SAMPLE_TIME_REQUIRED,
         ],
         build: build_delay,
@@ -330,6 +332,21 @@ impl Block for Delay {
             self.ring[self.head * w + k] = io.u_at(0, k);
         }
         self.head = (self.head + 1) % self.samples;
+    }
+    /// A ring of `samples` entries per element: the oldest out, the input in its place.
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        let (w, n) = (self.initial.len(), self.samples);
+        c.equation(format!("y(k) = u(k - {n})  (a ring buffer of {n} samples)"));
+        let initial: Vec<f64> = (0..n).flat_map(|_| self.initial.iter().copied()).collect();
+        let ring = c.state("ring", &initial);
+        let head = c.counter("head", 0);
+        let at = |k: usize| if n * w == 1 { ring.clone() } else { format!("{ring}[{head} * {w}u + {k}u]") };
+        for k in 0..w {
+            c.output(format!("{} = {};", c.y_at(0, k), at(k)));
+            c.update(format!("{} = {};", at(k), c.u_at(0, k)));
+        }
+        c.update(format!("if (++{head} == {n}u) {head} = 0u;"));
+        Ok(())
     }
 }
 

@@ -26,7 +26,7 @@ pub const TYPES: &[BlockType] = &[BlockType {
         param("n", Required, "number of parameters").kind(ParamKind::Number),
         param("lambda", Number(1.0), "forgetting factor, 0 < λ <= 1"),
         param("p0", Number(1e4), "initial covariance P(0) = p0·I"),
-        param("initial", Number(0.0), "θ̂(0): a number or n numbers"),
+        param("initial", Number(0.0), "θ̂(0): a number or n numbers").kind(ParamKind::Numbers),
         crate::SAMPLE_TIME_REQUIRED,
     ],
     build: build_rls,

@@ -3,6 +3,7 @@
 //! integrator's reset.
 
 use crate::{SAMPLE_TIME_INHERITED, U_SCALAR, Y_SCALAR, table::*};
+use ctlgraph_core::codegen::c::{CBlock, NoCForm};
 use ctlgraph_core::registry::{BlockType, Built};
 use ctlgraph_core::{Block, Crossing, Diagnostic, Interface, Io, Params, Width};
 
@@ -25,7 +26,7 @@ pub const TYPES: &[BlockType] = &[
             param("off_threshold", Number(-0.5), "switch-off point, <= on_threshold"),
             param("on_value", Number(1.0), "output while on"),
             param("off_value", Number(0.0), "output while off"),
-            param("initial", Word("off"), "off or on"),
+            param("initial", Word("off"), "off or on").options(&["off", "on"]),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_relay,
@@ -43,7 +44,7 @@ pub const TYPES: &[BlockType] = &[
         outputs: Y_SCALAR,
         params: &[
             param("level", Number(0.0), "the level watched"),
-            param("direction", Word("either"), "rising, falling or either"),
+            param("direction", Word("either"), "rising, falling or either").options(&["either", "rising", "falling"]),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_hit_crossing,
@@ -73,6 +74,31 @@ impl Trigger {
             Trigger::Either => rising || falling,
             Trigger::Level => now != 0.0,
         }
+    }
+
+    /// [`Trigger::fired`] in C, over the C expressions `before`, `now`
+    /// and the literal `zero` (the same comparisons: NaN fires nothing).
+    pub fn c_fired(self, before: &str, now: &str, zero: &str) -> String {
+        let rising = format!("({before} < {zero} && {now} >= {zero}) || ({before} == {zero} && {now} > {zero})");
+        let falling = format!("({before} > {zero} && {now} <= {zero}) || ({before} == {zero} && {now} < {zero})");
+        match self {
+            Trigger::Rising => rising,
+            Trigger::Falling => falling,
+            Trigger::Either => format!("{rising} || {falling}"),
+            Trigger::Level => format!("{now} != {zero}"),
+        }
+    }
+
+    /// The `reset` parameter of a block that integrates (none, rising,
+    /// falling, either or level): what resets it, if anything.
+    pub fn reset_of(p: &mut Params) -> Result<Option<Trigger>, Diagnostic> {
+        Ok(match p.choice("reset", &["none", "rising", "falling", "either", "level"])? {
+            "rising" => Some(Trigger::Rising),
+            "falling" => Some(Trigger::Falling),
+            "either" => Some(Trigger::Either),
+            "level" => Some(Trigger::Level),
+            _ => None,
+        })
     }
 
     /// The zero-crossing direction that locates it.
@@ -126,6 +152,23 @@ impl Block for Relay {
 
     fn update(&mut self, _io: &mut Io) {
         self.on = self.next;
+    }
+
+    /// At every sample (a major step) the state may switch.
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        c.equation("on = was on ? u > off_threshold : u >= on_threshold;  y = on ? on_value : off_value");
+        let on = c.counter("on", u32::from(self.initial_on));
+        let next = c.counter("next", u32::from(self.initial_on));
+        let (u, y) = (c.u(0).to_string(), c.y(0).to_string());
+        c.output(format!(
+            "{next} = {on} ? ({u} > {}) : ({u} >= {});\n{y} = {next} ? {} : {};",
+            c.num(self.off_threshold),
+            c.num(self.on_threshold),
+            c.num(self.on_value),
+            c.num(self.off_value)
+        ));
+        c.update(format!("{on} = {next};"));
+        Ok(())
     }
 
     fn num_zero_crossings(&self) -> usize {

@@ -40,7 +40,8 @@ pub const TYPES: &[BlockType] = &[
             param("m", Required, "target mass, > 0").kind(ParamKind::Number),
             param("b", Required, "target damping, > 0").kind(ParamKind::Number),
             param("k", Required, "target stiffness, > 0").kind(ParamKind::Number),
-            param("method", Word("bilinear"), "discrete form: bilinear | backward_euler"),
+            param("method", Word("bilinear"), "discrete form: bilinear | backward_euler")
+                .options(&["bilinear", "backward_euler"]),
             param("hold_input", Flag(false), "true adds the `hold` input (conditional integration)"),
             param("sample_time", Number(0.0), "0 continuous, T > 0 discrete").kind(ParamKind::SampleTime),
         ],
@@ -68,7 +69,8 @@ pub const TYPES: &[BlockType] = &[
         params: &[
             param("mu_u", Required, "friction coefficient when climbing").kind(ParamKind::Number),
             param("mu_d", Described("mu_u"), "friction coefficient when descending").kind(ParamKind::Number),
-            param("select", Word("climbing"), "climbing (a 0/1 input) | slope (a surface-slope input)"),
+            param("select", Word("climbing"), "climbing (a 0/1 input) | slope (a surface-slope input)")
+                .options(&["climbing", "slope"]),
             crate::SAMPLE_TIME_INHERITED,
         ],
         build: build_normal_force,

@@ -41,15 +41,17 @@ pub const TYPES: &[BlockType] = &[BlockType {
         PortDoc { name: "state", doc: "x; with `state_port: true`" },
     ],
     params: &[
-        param("initial", Number(0.0), "x(0) and the reset value: a number or one per element"),
+        param("initial", Number(0.0), "x(0) and the reset value: a number or one per element").kind(ParamKind::Numbers),
         param(
             "initial_source",
             Word("internal"),
             "internal (the `initial` parameter) or external (the `initial` input)",
-        ),
+        )
+        .options(&["internal", "external"]),
         param("lower", Number(f64::NEG_INFINITY), "lower limit of x"),
         param("upper", Number(f64::INFINITY), "upper limit of x"),
-        param("reset", Word("none"), "none, rising, falling, either or level"),
+        param("reset", Word("none"), "none, rising, falling, either or level")
+            .options(&["none", "rising", "falling", "either", "level"]),
         param("state_port", Flag(false), "true adds the `state` output"),
     ],
     build: build_integrator,
@@ -252,13 +254,7 @@ fn build_integrator(p: &mut Params) -> Result<Built, Diagnostic> {
     if let Some(v) = initial.iter().find(|v| !(lower..=upper).contains(*v)) {
         return Err(p.error("initial", format!("{v} is outside [{lower}, {upper}]")));
     }
-    let reset = match p.choice("reset", &["none", "rising", "falling", "either", "level"])? {
-        "rising" => Some(Trigger::Rising),
-        "falling" => Some(Trigger::Falling),
-        "either" => Some(Trigger::Either),
-        "level" => Some(Trigger::Level),
-        _ => None,
-    };
+    let reset = Trigger::reset_of(p)?;
     let external = p.choice("initial_source", &["internal", "external"])? == "external";
     let state_port = p.flag("state_port")?;
     let mut iface = Interface::new(SampleTime::Continuous).input("u", Width::Common, false).output("y", Width::Common);

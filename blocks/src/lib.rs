@@ -27,12 +27,14 @@ mod build_tests;
 pub mod continuous;
 pub mod delay;
 pub mod discrete;
+pub mod discrete_integrator;
 pub mod estimation;
 pub mod events;
 pub mod fmu;
 pub mod force;
 pub mod fuzzy;
 pub mod integrator;
+pub mod logic;
 pub mod math;
 pub mod milling;
 pub mod motion;
@@ -48,6 +50,55 @@ mod test_rig;
 #[cfg(feature = "testing")]
 pub mod testing;
 
+/// The block types with a C form (`ctlgraph codegen --target c`,
+/// [`ctlgraph_core::Block::c_form`]); `inport` and `outport` are the
+/// controller's inputs and outputs. Each has a property test against its
+/// Rust form (`c_forms` in the root crate's tests).
+pub const TYPES_WITH_C_FORM: &[&str] = &[
+    "abs",
+    "constant",
+    "coulomb_viscous_friction",
+    "dead_zone",
+    "delay",
+    "demux",
+    "discrete_fir",
+    "discrete_integrator",
+    "discrete_transfer_function",
+    "divide",
+    "fcn",
+    "fuzzy",
+    "gain",
+    "ground",
+    "inport",
+    "leso",
+    "logical_operator",
+    "lookup_table_1d",
+    "lsef",
+    "max",
+    "memory",
+    "min",
+    "moving_average",
+    "mux",
+    "outport",
+    "pid",
+    "product",
+    "quantizer",
+    "rate_limiter",
+    "relational_operator",
+    "relay",
+    "saturation",
+    "selector",
+    "sign",
+    "sliding_mode",
+    "smc",
+    "sum",
+    "switch",
+    "terminator",
+    "tracking_differentiator",
+    "unit_delay",
+    "zero_order_hold",
+];
+
 /// A registry holding every block type of the library.
 pub fn registry() -> Registry {
     let mut reg = Registry::new();
@@ -61,7 +112,9 @@ pub fn registry() -> Registry {
         integrator::TYPES,
         delay::TYPES,
         events::TYPES,
+        logic::TYPES,
         discrete::TYPES,
+        discrete_integrator::TYPES,
         pid::TYPES,
         adrc::TYPES,
         fuzzy::TYPES,

@@ -2,13 +2,15 @@
 //! `fcn` (an expression of the inputs and time). All elementwise on any
 //! width, scalar inputs broadcast.
 
+pub mod fcn;
+
 use crate::nonlinear::Piecewise;
 use crate::{SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, Y_SCALAR, table::*};
-use ctlgraph_core::expr::Expr;
-use ctlgraph_core::params::{VarScope, expr_diagnostic};
+use ctlgraph_core::codegen::c::{CBlock, NoCForm};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::yaml::Kind;
-use ctlgraph_core::{Block, Crossing, Diagnostic, Interface, Io, Kernel, Params, SampleTime, Width};
+use ctlgraph_core::{Block, Crossing, Diagnostic, Interface, Io, Kernel, Params, Width};
+use fcn::build_fcn;
 
 const UN: &[PortDoc] = &[PortDoc { name: "u1 … un", doc: "any widths; scalars broadcast" }];
 const Y_ELEMENTWISE: &[PortDoc] = &[PortDoc { name: "y", doc: "width of the widest input" }];
@@ -23,7 +25,7 @@ pub const TYPES: &[BlockType] = &[
         inputs: U_ANY,
         outputs: Y_SAME,
         params: &[
-            param("k", Number(1.0), "number, list (elementwise) or list of rows (matrix)"),
+            param("k", Number(1.0), "number, list (elementwise) or list of rows (matrix)").kind(ParamKind::Matrix),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_gain,
@@ -143,7 +145,14 @@ fn nary(p: &mut Params, n: usize, block: impl Block + 'static) -> Result<Built, 
 }
 
 fn build_abs(p: &mut Params) -> Result<Built, Diagnostic> {
-    Piecewise::new(vec![0.0], |_, r, u| if r == 0 { -u } else { u }).build(p)
+    Piecewise::new(
+        vec![0.0],
+        |_, r, u| if r == 0 { -u } else { u },
+        |_, _, r, u| {
+            if r == 0 { format!("(-{u})") } else { u.to_string() }
+        },
+    )
+    .build(p)
 }
 
 /// sign(0) = 0, as MATLAB.
@@ -158,15 +167,19 @@ pub fn sign(v: f64) -> f64 {
 }
 
 fn build_sign(p: &mut Params) -> Result<Built, Diagnostic> {
-    Piecewise::new(vec![0.0], |_, r, u| {
-        if u == 0.0 {
-            0.0
-        } else if r == 0 {
-            -1.0
-        } else {
-            1.0
-        }
-    })
+    Piecewise::new(
+        vec![0.0],
+        |_, r, u| {
+            if u == 0.0 {
+                0.0
+            } else if r == 0 {
+                -1.0
+            } else {
+                1.0
+            }
+        },
+        |num, _, r, u| format!("({u} == {} ? {} : {})", num(0.0), num(0.0), num(if r == 0 { -1.0 } else { 1.0 })),
+    )
     .build(p)
 }
 
@@ -221,6 +234,25 @@ impl Block for Gain {
                 }
             }
         }
+    }
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        match self {
+            Gain::Elementwise(k) => {
+                c.equation("y_i = k_i u_i");
+                for (i, &ki) in k.iter().enumerate() {
+                    c.output(format!("{} = {} * {};", c.y_at(0, i), c.num(ki), c.u_at(0, i)));
+                }
+            }
+            Gain::Matrix { k, cols } => {
+                c.equation("y = K u: y_r = sum over c of K_rc u_c, left to right");
+                for r in 0..c.output_width(0) {
+                    let terms: Vec<String> =
+                        (0..*cols).map(|j| format!("{} * {}", c.num(k[r * *cols + j]), c.u_at(0, j))).collect();
+                    c.output(format!("{} = {};", c.y_at(0, r), terms.join(" + ")));
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -287,6 +319,35 @@ impl Block for Sum {
             io.set_at(0, k, v);
         }
     }
+    /// ±1·u is exact and a + (−b) is a − b, so the signed terms added
+    /// left to right are the block's sum to the bit.
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        let signed = |terms: Vec<(f64, String)>| {
+            let mut text = String::new();
+            for (i, (s, u)) in terms.into_iter().enumerate() {
+                text.push_str(match (i, s > 0.0) {
+                    (0, true) => "",
+                    (0, false) => "-",
+                    (_, true) => " + ",
+                    (_, false) => " - ",
+                });
+                text.push_str(&u);
+            }
+            text
+        };
+        if let [s] = self.signs[..] {
+            c.equation("y = sign * (u_1 + u_2 + ...), the elements of the one input");
+            let all = (0..c.input_width(0)).map(|j| (1.0, c.u_at(0, j).to_string())).collect();
+            c.output(format!("{} = {} * ({});", c.y(0), c.num(s), signed(all)));
+            return Ok(());
+        }
+        c.equation("y = s_1 u_1 + s_2 u_2 + ..., element by element, left to right");
+        for k in 0..c.output_width(0) {
+            let terms = self.signs.iter().enumerate().map(|(i, &s)| (s, c.u_at(i, k).to_string())).collect();
+            c.output(format!("{} = {};", c.y_at(0, k), signed(terms)));
+        }
+        Ok(())
+    }
 }
 
 fn build_sum(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -334,6 +395,17 @@ impl Block for Product {
             }
             io.set_at(0, k, v);
         }
+    }
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        c.equation("y = 1 op u1 op u2 ..., op * or /, left to right, element by element");
+        for k in 0..c.output_width(0) {
+            let mut e = c.num(1.0);
+            for (i, &div) in self.divide.iter().enumerate() {
+                e = format!("{e} {} {}", if div { "/" } else { "*" }, c.u_at(i, k));
+            }
+            c.output(format!("{} = {e};", c.y_at(0, k)));
+        }
+        Ok(())
     }
 }
 
@@ -411,6 +483,29 @@ impl Block for Extremum {
         }
     }
 
+    /// The mode chosen afresh at each sample (a major step): the first
+    /// input attaining the extremum.
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        let (f, op) = if self.max { (c.math("fmax"), ">") } else { (c.math("fmin"), "<") };
+        if self.inputs == 1 {
+            c.equation("y = the extremum of u's elements");
+            let all: Vec<String> = (0..c.input_width(0)).map(|j| c.u_at(0, j).to_string()).collect();
+            let v = all[1..].iter().fold(all[0].clone(), |a, b| format!("{f}({a}, {b})"));
+            c.output(format!("{} = {v};", c.y(0)));
+            return Ok(());
+        }
+        c.equation("y = the first input attaining the extremum, element by element");
+        for k in 0..c.output_width(0) {
+            let mut text = format!("{{\n    {} v = {};\n", c.real(), c.u_at(0, k));
+            for i in 1..self.inputs {
+                text.push_str(&format!("    if ({u} {op} v) v = {u};\n", u = c.u_at(i, k)));
+            }
+            text.push_str(&format!("    {} = v;\n}}", c.y_at(0, k)));
+            c.output(text);
+        }
+        Ok(())
+    }
+
     fn crossing_direction(&self, k: usize) -> Crossing {
         if self.selected[k / self.inputs] == k % self.inputs {
             Crossing::Ignore
@@ -440,74 +535,4 @@ fn build_min(p: &mut Params) -> Result<Built, Diagnostic> {
 
 fn build_max(p: &mut Params) -> Result<Built, Diagnostic> {
     build_extremum(p, true)
-}
-
-/// A compiled expression over `[u1, …, un, t]`.
-#[derive(Clone)]
-pub struct Fcn {
-    expr: Expr,
-    vars: Vec<f64>,
-}
-
-impl Block for Fcn {
-    rust_type!(Fcn);
-    fn updates(&self) -> bool {
-        false
-    }
-    fn output(&mut self, io: &mut Io) {
-        let n = self.vars.len() - 1;
-        for i in 0..n {
-            self.vars[i] = io.u(i);
-        }
-        self.vars[n] = io.t;
-        let v = self.expr.eval(&self.vars);
-        io.set(0, v);
-    }
-}
-
-fn build_fcn(p: &mut Params) -> Result<Built, Diagnostic> {
-    let n = p.number_where("inputs", None, |v| v >= 0.0 && v.fract() == 0.0 && v < 1e4, "a whole number")?;
-    let n = n as usize;
-    let Some(src) = p.raw("expr") else {
-        return Err(p.block_error("missing parameter `expr`"));
-    };
-    let (text, pos) = match &src.kind {
-        Kind::Str(s) => (s.clone(), src.pos.clone()),
-        Kind::Num(v) => (v.to_string(), src.pos.clone()),
-        _ => {
-            return Err(p.error("expr", format!("expected a formula, found {}", src.describe())));
-        }
-    };
-    let names = port_names(n);
-    let mut vars: Vec<&str> = names.iter().map(String::as_str).collect();
-    if n == 1 {
-        // `u` and `u1` both name the single input: slot 0 either way.
-        vars = vec!["u1"];
-    }
-    vars.push("t");
-    struct Alias<'a>(VarScope<'a>);
-    impl ctlgraph_core::expr::Scope for Alias<'_> {
-        fn lookup(&self, name: &str) -> Option<ctlgraph_core::expr::Binding> {
-            let name = if name == "u" && self.0.vars.len() == 2 { "u1" } else { name };
-            self.0.lookup(name)
-        }
-        fn names(&self) -> Vec<String> {
-            self.0.names()
-        }
-    }
-    let scope = Alias(VarScope { vars: &vars, params: p.scope() });
-    let expr = Expr::parse(&text, &scope).map_err(|e| {
-        let d = expr_diagnostic(&e, &pos);
-        Diagnostic { message: format!("block `{}` (fcn): `expr`: {}", p.block_name(), d.message), ..d }
-    })?;
-    let reads_time = expr.uses_slot(n);
-    let default = if reads_time { SampleTime::Continuous } else { SampleTime::Inherited };
-    let mut iface = Interface::new(p.sample_time_or(default)?);
-    if !reads_time {
-        iface = iface.piecewise_constant();
-    }
-    for name in &names {
-        iface = iface.input(name, Width::Fixed(1), true);
-    }
-    Ok(Built::new(Fcn { expr, vars: vec![0.0; n + 1] }, iface.output("y", Width::Fixed(1))))
 }

@@ -60,7 +60,7 @@ pub const TYPES: &[BlockType] = &[BlockType {
         param("krc", Required, "radial coefficient instead of kr: Kr = krc/kt").kind(ParamKind::Number).unit("N/mm²"),
         param("ap", Required, "axial depth of cut, >= 0").kind(ParamKind::Number).unit("mm"),
         param("ft", Required, "feed per tooth ft, >= 0").kind(ParamKind::Number).unit("mm"),
-        param("milling", Word("up"), "up | down (with immersion)"),
+        param("milling", Word("up"), "up | down (with immersion)").options(&["up", "down"]),
         param("immersion", Number(1.0), "radial immersion ae/D in (0, 1]"),
         param("entry", Required, "entry angle φst, instead of milling/immersion").kind(ParamKind::Number).unit("deg"),
         param("exit", Required, "exit angle φex, entry < exit <= entry + 360").kind(ParamKind::Number).unit("deg"),

@@ -3,6 +3,7 @@
 //! corners (saturation, dead zone, abs, sign).
 
 use crate::{SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, table::*};
+use ctlgraph_core::codegen::c::{CBlock, NoCForm};
 use ctlgraph_core::registry::{BlockType, Built};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
@@ -18,6 +19,37 @@ macro_rules! piecewise_doc {
 pub(crate) use piecewise_doc;
 
 pub const TYPES: &[BlockType] = &[
+    BlockType {
+        name: "quantizer",
+        category: "nonlinear",
+        summary: "Rounds to a multiple of an interval (Simulink's Quantizer).",
+        doc: "y = q·round(u/q), elementwise, halves rounded away from zero (round-to-nearest, as \
+              Simulink's Quantizer). A staircase: its output changes only where u/q passes a half \
+              integer.\n\
+              Bounds: |y − u| <= q/2.",
+        inputs: U_ANY,
+        outputs: Y_SAME,
+        params: &[param("interval", Number(0.5), "quantization interval q > 0"), SAMPLE_TIME_INHERITED],
+        build: build_quantizer,
+    },
+    BlockType {
+        name: "coulomb_viscous_friction",
+        category: "nonlinear",
+        summary: "Coulomb and viscous friction: y = sign(u)·(gain·|u| + offset) (Simulink's block).",
+        doc: concat!(
+            "y = sign(u)·(gain·|u| + offset) = gain·u + sign(u)·offset, elementwise: a jump of 2·offset \
+             at u = 0 (where y = 0), slope `gain` either side.",
+            piecewise_doc!()
+        ),
+        inputs: U_ANY,
+        outputs: Y_SAME,
+        params: &[
+            param("offset", Number(1.0), "Coulomb friction: the jump either side of 0"),
+            param("gain", Number(1.0), "viscous friction coefficient: the slope"),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_friction,
+    },
     BlockType {
         name: "saturation",
         category: "nonlinear",
@@ -86,12 +118,18 @@ pub struct Piecewise {
     breaks: Vec<f64>,
     /// Piece `r` at input `u`, given the breakpoints.
     piece: fn(&[f64], usize, f64) -> f64,
+    /// `piece` in C.
+    c_piece: CPiece,
     modes: Vec<usize>,
 }
 
+/// A [`Piecewise`] block's piece `r` at `u` as a C expression, given a
+/// number's literal and the breakpoints' literals.
+pub type CPiece = fn(&dyn Fn(f64) -> String, &[String], usize, &str) -> String;
+
 impl Piecewise {
-    pub fn new(breaks: Vec<f64>, piece: fn(&[f64], usize, f64) -> f64) -> Self {
-        Piecewise { breaks, piece, modes: vec![0] }
+    pub fn new(breaks: Vec<f64>, piece: fn(&[f64], usize, f64) -> f64, c_piece: CPiece) -> Self {
+        Piecewise { breaks, piece, c_piece, modes: vec![0] }
     }
 
     /// Builds the block with one input `u` and output `y` of any width.
@@ -125,6 +163,31 @@ impl Block for Piecewise {
         }
     }
 
+    /// The mode chosen afresh at each sample (a major step): how many
+    /// breakpoints u is above, then that piece.
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        let breaks: Vec<String> = self.breaks.iter().map(|&b| c.num(b)).collect();
+        let real = c.real();
+        let num = |v: f64| c.num(v);
+        let count: Vec<String> = breaks.iter().map(|b| format!("(u > {b})")).collect();
+        let pieces: Vec<String> = (0..=breaks.len()).map(|r| (self.c_piece)(&num, &breaks, r, "u")).collect();
+        let choose = (1..pieces.len())
+            .rev()
+            .fold(pieces[pieces.len() - 1].clone(), |rest, r| format!("r == {} ? {} : {rest}", r - 1, pieces[r - 1]));
+        let mut statements = Vec::new();
+        for k in 0..c.output_width(0) {
+            statements.push(format!(
+                "{{\n    {real} u = {};\n    int r = {};\n    {} = {choose};\n}}",
+                c.u_at(0, k),
+                count.join(" + "),
+                c.y_at(0, k)
+            ));
+        }
+        c.equation("r = the number of breakpoints below u; y = piece r of u");
+        statements.into_iter().for_each(|s| c.output(s));
+        Ok(())
+    }
+
     fn num_zero_crossings(&self) -> usize {
         self.modes.len() * self.breaks.len()
     }
@@ -140,6 +203,94 @@ impl Block for Piecewise {
 }
 
 /// Reads `lower`/`upper`-style limit pairs, checking their order.
+/// y = q·round(u/q).
+#[derive(Clone)]
+pub struct Quantizer {
+    interval: f64,
+}
+
+impl Block for Quantizer {
+    rust_type!(Quantizer);
+    fn updates(&self) -> bool {
+        false
+    }
+    fn output(&mut self, io: &mut Io) {
+        for k in 0..io.output_width(0) {
+            let v = self.interval * (io.u_at(0, k) / self.interval).round();
+            io.set_at(0, k, v);
+        }
+    }
+    /// C99's `round` rounds halves away from zero, as Rust's `f64::round`.
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        c.equation("y = q round(u / q)");
+        let (q, round) = (c.num(self.interval), c.math("round"));
+        for k in 0..c.output_width(0) {
+            c.output(format!("{} = {q} * {round}({} / {q});", c.y_at(0, k), c.u_at(0, k)));
+        }
+        Ok(())
+    }
+}
+
+fn build_quantizer(p: &mut Params) -> Result<Built, Diagnostic> {
+    let interval = p.number_where("interval", None, |q| q > 0.0 && q.is_finite(), "a positive interval")?;
+    let iface = Interface::new(p.sample_time()?).piecewise_constant().input("u", Width::Common, true);
+    Ok(Built::new(Quantizer { interval }, iface.output("y", Width::Common)))
+}
+
+/// y = gain·u + s·offset with s = sign(u) the mode.
+#[derive(Clone)]
+pub struct Friction {
+    offset: f64,
+    gain: f64,
+    /// Per element, sign(u) at the last major step.
+    sign: Vec<f64>,
+}
+
+impl Block for Friction {
+    rust_type!(Friction);
+    fn updates(&self) -> bool {
+        false
+    }
+    fn set_width(&mut self, width: usize) -> Result<(), String> {
+        self.sign = vec![0.0; width];
+        Ok(())
+    }
+    fn output(&mut self, io: &mut Io) {
+        for k in 0..io.output_width(0) {
+            let u = io.u_at(0, k);
+            if io.may_switch() {
+                self.sign[k] = crate::math::sign(u);
+            }
+            io.set_at(0, k, self.gain * u + self.sign[k] * self.offset);
+        }
+    }
+    fn num_zero_crossings(&self) -> usize {
+        self.sign.len()
+    }
+    fn zero_crossings(&self, io: &Io, g: &mut [f64]) {
+        for (k, g) in g.iter_mut().enumerate().take(self.sign.len()) {
+            *g = io.u_at(0, k);
+        }
+    }
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        c.equation("y = gain u + sign(u) offset");
+        let (gain, offset, sign) = (c.num(self.gain), c.num(self.offset), c.sign());
+        for k in 0..c.output_width(0) {
+            let u = c.u_at(0, k).to_string();
+            c.output(format!("{} = {gain} * {u} + {sign}({u}) * {offset};", c.y_at(0, k)));
+        }
+        Ok(())
+    }
+}
+
+fn build_friction(p: &mut Params) -> Result<Built, Diagnostic> {
+    let finite = |v: f64| v.is_finite();
+    let offset = p.number_where("offset", None, finite, "a finite number")?;
+    let gain = p.number_where("gain", None, finite, "a finite number")?;
+    let iface = Interface::new(p.sample_time()?).piecewise_constant().input("u", Width::Common, true);
+    Ok(Built::new(Friction { offset, gain, sign: vec![0.0] }, iface.output("y", Width::Common)))
+}
+
 pub(crate) fn limits(p: &mut Params, lo: &str, hi: &str) -> Result<(f64, f64), Diagnostic> {
     let (lower, upper) = (p.number(lo)?, p.number(hi)?);
     if lower > upper || lower.is_nan() || upper.is_nan() {
@@ -152,11 +303,19 @@ pub(crate) fn limits(p: &mut Params, lo: &str, hi: &str) -> Result<(f64, f64), D
 
 /// Saturation: below `lower`, between, above `upper`.
 pub fn saturation(lower: f64, upper: f64) -> Piecewise {
-    Piecewise::new(vec![lower, upper], |b, r, u| match r {
-        0 => b[0],
-        1 => u,
-        _ => b[1],
-    })
+    Piecewise::new(
+        vec![lower, upper],
+        |b, r, u| match r {
+            0 => b[0],
+            1 => u,
+            _ => b[1],
+        },
+        |_, b, r, u| match r {
+            0 => b[0].clone(),
+            1 => u.to_string(),
+            _ => b[1].clone(),
+        },
+    )
 }
 
 fn build_saturation(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -166,11 +325,19 @@ fn build_saturation(p: &mut Params) -> Result<Built, Diagnostic> {
 
 fn build_dead_zone(p: &mut Params) -> Result<Built, Diagnostic> {
     let (start, end) = limits(p, "start", "end")?;
-    Piecewise::new(vec![start, end], |b, r, u| match r {
-        0 => u - b[0],
-        1 => 0.0,
-        _ => u - b[1],
-    })
+    Piecewise::new(
+        vec![start, end],
+        |b, r, u| match r {
+            0 => u - b[0],
+            1 => 0.0,
+            _ => u - b[1],
+        },
+        |num, b, r, u| match r {
+            0 => format!("({u} - {})", b[0]),
+            1 => num(0.0),
+            _ => format!("({u} - {})", b[1]),
+        },
+    )
     .build(p)
 }
 
@@ -224,6 +391,32 @@ impl Block for RateLimiter {
     fn update(&mut self, io: &mut Io) {
         self.last.copy_from_slice(&self.current);
         self.last_t = io.t;
+    }
+    /// The discrete limiter (a continuous one is refused as continuous:
+    /// it updates at every major step).
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        c.equation("dt = t - t_last;  y = y_last + clamp((u - y_last)/dt, falling, rising) dt  (y_last when dt = 0)");
+        let w = self.last.len();
+        let last = c.state("last", &vec![self.initial; w]);
+        let current = c.state("current", &vec![self.initial; w]);
+        let last_t = c.state("last_t", &[0.0]);
+        let (t, clamp, real) = (c.time(), c.clamp(), c.real());
+        let at = |name: &str, k: usize| if w == 1 { name.to_string() } else { format!("{name}[{k}]") };
+        c.output(format!("{real} dt = {t} - {last_t};"));
+        for k in 0..w {
+            let (l, cur) = (at(&last, k), at(&current, k));
+            c.output(format!(
+                "{cur} = dt > {zero} ? {l} + {clamp}(({u} - {l}) / dt, {falling}, {rising}) * dt : {l};\n{y} = {cur};",
+                zero = c.num(0.0),
+                u = c.u_at(0, k),
+                falling = c.num(self.falling),
+                rising = c.num(self.rising),
+                y = c.y_at(0, k)
+            ));
+            c.update(format!("{l} = {cur};"));
+        }
+        c.update(format!("{last_t} = {t};"));
+        Ok(())
     }
 }
 

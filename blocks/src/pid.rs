@@ -3,6 +3,7 @@
 //! input ports for gain scheduling.
 
 use crate::table::*;
+use ctlgraph_core::codegen::c::{CBlock, NoCForm};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
@@ -34,7 +35,11 @@ pub const TYPES: &[BlockType] = &[BlockType {
         param("n", Number(100.0), "derivative filter coefficient N").unit("rad/s"),
         param("lower", Number(f64::NEG_INFINITY), "lower output limit"),
         param("upper", Number(f64::INFINITY), "upper output limit"),
-        param("anti_windup", Word("clamping"), "clamping | back_calculation | none"),
+        param("anti_windup", Word("clamping"), "clamping | back_calculation | none").options(&[
+            "clamping",
+            "back_calculation",
+            "none",
+        ]),
         param("kb", Number(1.0), "back-calculation gain").unit("1/s"),
         param("initial", Number(0.0), "initial integrator output I(0)"),
         param("gain_inputs", Described("[]"), "gains read from input ports each step: any of kp, ki, kd")
@@ -208,6 +213,53 @@ impl Block for DiscretePid {
         let (v, u, ki_e, filter) = self.eval(io);
         self.integral += self.period * self.law.integrand(ki_e, v, u);
         self.filter = filter;
+    }
+    /// [`DiscretePid::eval`] in the output and again in the update (as
+    /// the block does), then [`PidLaw::integrand`] for the anti-windup.
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        let l = &self.law;
+        c.equation("x_f = (x_f(k-1) + N T e)/(1 + N T);  v = kp e + I + kd N (e - x_f);  u = sat(v)");
+        c.equation(match l.anti_windup {
+            AntiWindup::Clamping => "I(k+1) = I + T ki e, held while ki e pushes v further past a limit (clamping)",
+            AntiWindup::BackCalculation { .. } => "I(k+1) = I + T (ki e + kb (u - v)) (back-calculation)",
+            AntiWindup::None => "I(k+1) = I + T ki e",
+        });
+        let integral = c.state("integral", &[self.initial]);
+        let filter = c.state("filter", &[0.0]);
+        let fixed = [l.kp, l.ki, l.kd];
+        let g: Vec<String> = (0..3).map(|i| l.gain_ports[i].map_or(c.num(fixed[i]), |p| c.u(p).to_string())).collect();
+        let (real, e) = (c.real(), c.u(0).to_string());
+        let nt = c.num(l.n * self.period);
+        let limited = if l.lower == f64::NEG_INFINITY && l.upper == f64::INFINITY {
+            "v".to_string()
+        } else {
+            format!("{}(v, {}, {})", c.clamp(), c.num(l.lower), c.num(l.upper))
+        };
+        let eval = format!(
+            "{real} xf = ({filter} + {nt} * {e}) / ({one} + {nt});\n\
+             {real} v = {kp} * {e} + {integral} + {kd} * {n} * ({e} - xf);\n{real} u = {limited};",
+            one = c.num(1.0),
+            kp = g[0],
+            kd = g[2],
+            n = c.num(l.n),
+        );
+        c.output(format!("{eval}\n{} = u;", c.y(0)));
+        let ki_e = format!("{} * {e}", g[1]);
+        let integrand = match l.anti_windup {
+            AntiWindup::None => "ki_e".to_string(),
+            AntiWindup::BackCalculation { kb } => format!("ki_e + {} * (u - v)", c.num(kb)),
+            AntiWindup::Clamping => format!(
+                "((v >= {upper} && ki_e > {zero}) || (v <= {lower} && ki_e < {zero})) ? {zero} : ki_e",
+                upper = c.num(l.upper),
+                lower = c.num(l.lower),
+                zero = c.num(0.0)
+            ),
+        };
+        c.update(format!(
+            "{eval}\n{real} ki_e = {ki_e};\n(void)u;\n(void)v;\n{integral} += {period} * ({integrand});\n{filter} = xf;",
+            period = c.num(self.period)
+        ));
+        Ok(())
     }
 }
 

@@ -3,6 +3,7 @@
 //! `ctlgraph blocks` documents them.
 
 use crate::{SAMPLE_TIME_INHERITED, table::*};
+use ctlgraph_core::codegen::c::{CBlock, NoCForm};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Kernel, Params, Width};
 
@@ -65,7 +66,7 @@ pub const TYPES: &[BlockType] = &[
         outputs: &[PortDoc { name: "y", doc: "width of u1/u2" }],
         params: &[
             param("threshold", Number(0.0), "compared with control"),
-            param("criterion", Word(">="), ">= | > | !=0"),
+            param("criterion", Word(">="), ">= | > | !=0").options(&[">=", ">", "!=0"]),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_switch,
@@ -104,6 +105,26 @@ pub const TYPES: &[BlockType] = &[
         build: structural,
     },
     BlockType {
+        name: "ground",
+        category: "routing",
+        summary: "Zero (Simulink's Ground): for an input that is to read nothing.",
+        doc: "y = 0, of `width` elements, computed once.",
+        inputs: &[],
+        outputs: &[PortDoc { name: "y", doc: "zeros" }],
+        params: &[param("width", Number(1.0), "the number of elements")],
+        build: build_ground,
+    },
+    BlockType {
+        name: "terminator",
+        category: "routing",
+        summary: "Ends a signal that nothing else reads (Simulink's Terminator).",
+        doc: "Reads its input and does nothing with it: an output that is not used, said so in the diagram.",
+        inputs: &[PortDoc { name: "u", doc: "any width" }],
+        outputs: &[],
+        params: &[SAMPLE_TIME_INHERITED],
+        build: build_terminator,
+    },
+    BlockType {
         name: "outport",
         category: "structure",
         summary: "An output of a subsystem, or of the graph itself (the block's name is the port's name).",
@@ -115,6 +136,56 @@ pub const TYPES: &[BlockType] = &[
         build: structural,
     },
 ];
+
+/// Zeros, once.
+#[derive(Clone)]
+pub struct Ground;
+
+impl Block for Ground {
+    rust_type!(Ground);
+    fn updates(&self) -> bool {
+        false
+    }
+    fn time_only(&self) -> Option<ctlgraph_core::TimeOnly> {
+        Some(ctlgraph_core::TimeOnly::Smooth)
+    }
+    fn output(&mut self, io: &mut Io) {
+        io.output(0).iter_mut().for_each(|v| *v = 0.0);
+    }
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        c.equation("y = 0");
+        for k in 0..c.output_width(0) {
+            c.output(format!("{} = {};", c.y_at(0, k), c.num(0.0)));
+        }
+        Ok(())
+    }
+}
+
+fn build_ground(p: &mut Params) -> Result<Built, Diagnostic> {
+    let width = p.count("width", 1_000_000)?.max(1);
+    let iface = Interface::new(ctlgraph_core::SampleTime::Constant).output("y", Width::Fixed(width));
+    Ok(Built::new(Ground, iface))
+}
+
+/// Reads its input, writes nothing.
+#[derive(Clone)]
+pub struct Terminator;
+
+impl Block for Terminator {
+    rust_type!(Terminator);
+    fn updates(&self) -> bool {
+        false
+    }
+    fn output(&mut self, _io: &mut Io) {}
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        c.equation("nothing: the input ends here");
+        Ok(())
+    }
+}
+
+fn build_terminator(p: &mut Params) -> Result<Built, Diagnostic> {
+    Ok(Built::new(Terminator, Interface::new(p.sample_time()?).input("u", Width::Common, false)))
+}
 
 /// Never called: the loader and compiler handle these types themselves.
 fn structural(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -157,6 +228,17 @@ impl Block for Concat {
             }
         }
     }
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        c.equation("y = [u1, u2, ...]");
+        let mut k = 0;
+        for port in 0..c.num_inputs() {
+            for j in 0..c.input_width(port) {
+                c.output(format!("{} = {};", c.y_at(0, k), c.u_at(port, j)));
+                k += 1;
+            }
+        }
+        Ok(())
+    }
 }
 
 fn build_mux(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -189,6 +271,17 @@ impl Block for Split {
             }
         }
     }
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        c.equation("[y1, y2, ...] = u");
+        let mut k = 0;
+        for (port, &w) in self.0.iter().enumerate() {
+            for j in 0..w {
+                c.output(format!("{} = {};", c.y_at(port, j), c.u_at(0, k)));
+                k += 1;
+            }
+        }
+        Ok(())
+    }
 }
 
 fn build_demux(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -220,6 +313,13 @@ impl Block for Selector {
             let v = io.input(0)[i];
             io.set_at(0, k, v);
         }
+    }
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        c.equation("y_k = u[index_k]");
+        for (k, &i) in self.0.iter().enumerate() {
+            c.output(format!("{} = {};", c.y_at(0, k), c.u_at(0, i)));
+        }
+        Ok(())
     }
 }
 
@@ -271,6 +371,21 @@ impl Block for Switch {
             let v = io.u_at(port, k);
             io.set_at(0, k, v);
         }
+    }
+
+    /// The criterion decided afresh at each sample (a major step).
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        let control = c.u(1).to_string();
+        let test = match self.criterion {
+            Criterion::AtLeast => format!("{control} >= {}", c.num(self.threshold)),
+            Criterion::Above => format!("{control} > {}", c.num(self.threshold)),
+            Criterion::NonZero => format!("{control} != {}", c.num(0.0)),
+        };
+        c.equation("y = control passes the criterion ? u1 : u2");
+        for k in 0..c.output_width(0) {
+            c.output(format!("{} = ({test}) ? {} : {};", c.y_at(0, k), c.u_at(0, k), c.u_at(2, k)));
+        }
+        Ok(())
     }
 
     fn num_zero_crossings(&self) -> usize {

@@ -3,6 +3,7 @@
 //! sliding-mode law with a boundary layer.
 
 use crate::table::*;
+use ctlgraph_core::codegen::c::{CBlock, NoCForm};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
@@ -147,6 +148,42 @@ impl Block for SlidingMode {
         x[0] = x[0].clamp(self.d_min, self.d_max);
         x[0] != before
     }
+    /// The discrete law ([`SlidingMode::law`]) and its forward-Euler estimate.
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        if self.period <= 0.0 {
+            return Err(NoCForm::Because("a continuous estimate d_hat: give it a sample_time".into()));
+        }
+        c.equation("S = lambda (xr - x) + (xr' - x');  u = Je (lambda (xr' - x') + xr'') + Be x' + d_hat + Ks S");
+        c.equation("d_hat(k+1) = clamp(d_hat + rho S T, d_min, d_max)");
+        let d_hat = c.state("d_hat", &[0.0f64.clamp(self.d_min, self.d_max)]);
+        let [xr, dxr, ddxr, x, dx] = [0, 1, 2, 3, 4].map(|i| c.u(i).to_string());
+        let real = c.real();
+        let kind = c.kind();
+        let n = |v: f64| kind.literal(v);
+        let law = format!(
+            "{real} s_ = {lambda} * ({xr} - {x}) + ({dxr} - {dx});\n\
+             {real} u_ = {je} * ({lambda} * ({dxr} - {dx}) + {ddxr}) + {be} * {dx} + {d_hat} + {ks} * s_;",
+            lambda = n(self.lambda),
+            je = n(self.je),
+            be = n(self.be),
+            ks = n(self.ks),
+        );
+        let u = if self.lower == f64::NEG_INFINITY && self.upper == f64::INFINITY {
+            "u_".to_string()
+        } else {
+            format!("{}(u_, {}, {})", c.clamp(), n(self.lower), n(self.upper))
+        };
+        let clamp = c.clamp();
+        c.output(format!("{law}\n{} = {u};\n{} = s_;\n{} = {d_hat};", c.y(0), c.y(1), c.y(2)));
+        c.update(format!(
+            "{law}\n(void)u_;\n{d_hat} = {clamp}({d_hat} + {rho} * s_ * {period}, {lo}, {hi});",
+            rho = n(self.rho),
+            period = n(self.period),
+            lo = n(self.d_min),
+            hi = n(self.d_max)
+        ));
+        Ok(())
+    }
 }
 
 fn build_sliding_mode(p: &mut Params) -> Result<Built, Diagnostic> {
@@ -184,6 +221,31 @@ impl Block for Smc {
         let u_eq = if self.equivalent { io.u(2) } else { 0.0 };
         io.set(0, u_eq + self.k * switching);
         io.set(1, s);
+    }
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        c.equation(if self.phi > 0.0 {
+            "S = lambda e + e';  u = u_eq + k sat(S / phi)"
+        } else {
+            "S = lambda e + e';  u = u_eq + k sign(S)"
+        });
+        let real = c.real();
+        let switching = if self.phi > 0.0 {
+            format!("{}(s_ / {}, {}, {})", c.clamp(), c.num(self.phi), c.num(-1.0), c.num(1.0))
+        } else {
+            format!("{}(s_)", c.sign())
+        };
+        // u_eq = 0 without the port: 0 + k·sw, as the block adds it.
+        let u_eq = if self.equivalent { c.u(2).to_string() } else { c.num(0.0) };
+        c.output(format!(
+            "{real} s_ = {} * {} + {};\n{} = {u_eq} + {} * {switching};\n{} = s_;",
+            c.num(self.lambda),
+            c.u(0),
+            c.u(1),
+            c.y(0),
+            c.num(self.k),
+            c.y(1)
+        ));
+        Ok(())
     }
 }
 

@@ -1,6 +1,7 @@
 //! Sources: constant, step, ramp, sine, pulse, clock.
 
 use crate::{ACTIVE, SAMPLE_TIME_CONTINUOUS, Y_SCALAR, table::*};
+use ctlgraph_core::codegen::c::{CBlock, NoCForm};
 use ctlgraph_core::registry::{BlockType, Built, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, SampleTime, TimeOnly, Width};
 
@@ -12,7 +13,7 @@ pub const TYPES: &[BlockType] = &[
         doc: "y = value. Computed once, at the start of the run.",
         inputs: &[],
         outputs: &[PortDoc { name: "y", doc: "the value; width = number of elements of `value`" }],
-        params: &[param("value", Number(1.0), "a number or a list of numbers"), ACTIVE],
+        params: &[param("value", Number(1.0), "a number or a list of numbers").kind(ParamKind::Numbers), ACTIVE],
         build: build_constant,
     },
     BlockType {
@@ -237,6 +238,13 @@ fn build_constant(p: &mut Params) -> Result<Built, Diagnostic> {
         }
         fn time_only(&self) -> Option<TimeOnly> {
             Some(TimeOnly::Smooth)
+        }
+        fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+            c.equation("y = value (computed once, in init)");
+            for (k, v) in self.0.iter().enumerate() {
+                c.output(format!("{} = {};", c.y_at(0, k), c.num(*v)));
+            }
+            Ok(())
         }
     }
     let iface = Interface::new(SampleTime::Constant).output("y", Width::Fixed(value.len()));

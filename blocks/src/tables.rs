@@ -2,6 +2,7 @@
 //! both by linear interpolation.
 
 use crate::{SAMPLE_TIME_CONTINUOUS, SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, Y_SCALAR, table::*};
+use ctlgraph_core::codegen::c::{CBlock, NoCForm};
 use ctlgraph_core::registry::{BlockType, Built, ParamDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
@@ -17,7 +18,7 @@ pub const TYPES: &[BlockType] = &[
         params: &[
             param("x", Required, "breakpoints, strictly increasing, at least two").kind(ParamKind::Numbers),
             param("y", Required, "table values, one per breakpoint").kind(ParamKind::Numbers),
-            param("extrapolation", Word("clamp"), "clamp | linear"),
+            param("extrapolation", Word("clamp"), "clamp | linear").options(&["clamp", "linear"]),
             SAMPLE_TIME_INHERITED,
         ],
         build: build_lookup,
@@ -35,7 +36,7 @@ pub const TYPES: &[BlockType] = &[
             param("file", Required, "CSV file with a header row"),
             param("column", Required, "header of the value column"),
             param("time", Word("t"), "header of the time column"),
-            param("extrapolation", Word("hold"), "hold | linear | zero"),
+            param("extrapolation", Word("hold"), "hold | linear | zero").options(&["hold", "linear", "zero"]),
             MAX_FILE_MIB,
             SAMPLE_TIME_CONTINUOUS,
             crate::ACTIVE,
@@ -125,6 +126,38 @@ impl Block for Lookup {
             let v = self.0.eval(io.u_at(0, k));
             io.set_at(0, k, v);
         }
+    }
+    /// [`Table::eval`]: the segment found by counting breakpoints (the
+    /// same one as the binary search), the same interpolation.
+    fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
+        let t = &self.0;
+        let x: Vec<String> = t.x.iter().map(|&v| c.num(v)).collect();
+        let y: Vec<String> = t.y.iter().map(|&v| c.num(v)).collect();
+        let (x, y) = (c.table("x", c.real(), &x), c.table("y", c.real(), &y));
+        let outside = match t.outside {
+            Outside::Clamp => 0,
+            Outside::Linear => 1,
+            Outside::Zero => 2,
+        };
+        let f = c.helper("ctl_lookup", |r| {
+            let (ty, zero) = (r.c_type(), r.literal(0.0));
+            format!(
+                "/* Linear interpolation in breakpoints x (increasing); outside: 0 clamp, 1 extrapolate, 2 zero */\n\
+                 static {ty} ctl_lookup(const {ty} *x, const {ty} *y, int32_t n, int outside, {ty} u)\n{{\n\
+                 \x20   int32_t i = 0, j;\n\
+                 \x20   if (u < x[0] || u > x[n - 1]) {{\n\
+                 \x20       if (outside == 2) return {zero};\n        if (outside == 0) return u < x[0] ? y[0] : y[n - 1];\n    }}\n\
+                 \x20   for (j = 0; j < n; j++) if (x[j] <= u) i = j + 1;\n\
+                 \x20   if (i < 1) i = 1;\n    if (i > n - 1) i = n - 1;\n    i -= 1;\n\
+                 \x20   if (x[i + 1] == x[i]) return y[i + 1];\n\
+                 \x20   return y[i] + (y[i + 1] - y[i]) * (u - x[i]) / (x[i + 1] - x[i]);\n}}\n"
+            )
+        });
+        c.equation("y = linear interpolation of the table at u");
+        for k in 0..c.output_width(0) {
+            c.output(format!("{} = {f}({x}, {y}, {}, {outside}, {});", c.y_at(0, k), t.x.len(), c.u_at(0, k)));
+        }
+        Ok(())
     }
 }
 

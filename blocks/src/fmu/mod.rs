@@ -55,7 +55,8 @@ pub const TYPES: &[BlockType] = &[BlockType {
             "mode",
             Word("cs"),
             "cs: co-simulation (the FMU's own solver between hits); me: model exchange (ctlgraph's solver)",
-        ),
+        )
+        .options(&["cs", "me"]),
         param(
             "sample_time",
             Described("the FMU's DefaultExperiment stepSize"),

@@ -79,18 +79,18 @@ fn trapezoid_centroid(s0: f64, s1: f64, first: f64, last: f64, lo: f64, dx: f64,
 #[derive(Clone, Debug)]
 pub(super) struct PartitionCentroid {
     /// Per pair of neighbouring peaks, the cell between them.
-    cells: Vec<Cell>,
+    pub(super) cells: Vec<Cell>,
     /// The cells holding the grid's first and last points, and s there
     /// (the trapezoid rule weighs the end samples by half).
-    ends: [(usize, f64); 2],
+    pub(super) ends: [(usize, f64); 2],
     /// Index L of the last grid point.
-    last: f64,
-    lo: f64,
-    hi: f64,
+    pub(super) last: f64,
+    pub(super) lo: f64,
+    pub(super) hi: f64,
     /// The grid's step, (hi − lo)/L.
-    dx: f64,
-    implication: Implication,
-    aggregation: Aggregation,
+    pub(super) dx: f64,
+    pub(super) implication: Implication,
+    pub(super) aggregation: Aggregation,
 }
 
 impl PartitionCentroid {
@@ -273,27 +273,27 @@ impl Method for ProductSum {
 /// s = (i + offset)/span for the i-th, span = (q − p)/dx. Edges are found
 /// once, so neighbouring cells agree on which grid points are whose.
 #[derive(Clone, Debug)]
-struct Cell {
-    start: f64,
-    len: f64,
+pub(super) struct Cell {
+    pub(super) start: f64,
+    pub(super) len: f64,
     /// `len` as an index.
-    top: i32,
+    pub(super) top: i32,
     /// offset − ½ (`below` rounds to the nearest whole number).
-    offset_less_half: f64,
-    span: f64,
+    pub(super) offset_less_half: f64,
+    pub(super) span: f64,
     /// 1/span: how much s moves per grid point.
-    per_point: f64,
+    pub(super) per_point: f64,
     /// s at the first point.
-    s_first: f64,
+    pub(super) s_first: f64,
     /// `sums_below(len)`.
-    len_sums: (f64, f64, f64),
+    pub(super) len_sums: (f64, f64, f64),
     /// [`Below`] n = 0 … len: looked up, not computed, in `below` (a few
     /// floating-point operations and a division fewer per breakpoint, in
     /// the evaluation's longest chain); 56 bytes a point, 5.6 MB an output
     /// at the block's largest resolution.
     below: Box<[Below]>,
     /// Whether some point lies past p (where the rising term is nonzero).
-    rises: bool,
+    pub(super) rises: bool,
 }
 
 impl Cell {

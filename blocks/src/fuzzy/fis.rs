@@ -74,7 +74,7 @@ pub struct Methods {
 impl Methods {
     /// Whether the implied sets depend on the rules only through their
     /// terms' strengths: all but sum aggregation of min implication.
-    fn by_term(&self) -> bool {
+    pub(super) fn by_term(&self) -> bool {
         !(self.aggregation == Aggregation::Sum && self.implication == Implication::Min)
     }
 }
@@ -107,7 +107,7 @@ pub struct Fis {
     supports: Vec<Vec<Range<usize>>>,
     /// Per output: its centroid in closed form, when its terms are a
     /// triangular partition and the methods allow (see `centroid`).
-    exact: Vec<Option<PartitionCentroid>>,
+    pub(super) exact: Vec<Option<PartitionCentroid>>,
     /// Where each input's term memberships start in `membership`.
     offsets: Vec<usize>,
     /// Rules that fire only when one given membership is nonzero (an AND
@@ -117,10 +117,10 @@ pub struct Fis {
     dense: Vec<usize>,
     /// When the inputs are triangular partitions and the rules a table:
     /// the rules that can fire found by arithmetic (see `grid`).
-    grid: Option<RuleGrid>,
+    pub(super) grid: Option<RuleGrid>,
     /// With the table, when outputs need only their terms' strengths: each
     /// cell's conclusions as indices into `term_strength`.
-    grid_terms: Option<TermsByCell>,
+    pub(super) grid_terms: Option<TermsByCell>,
     // Work buffers.
     membership: Vec<f64>,
     clipped: Vec<f64>,
@@ -134,9 +134,9 @@ pub struct Fis {
     /// rules that all outputs share. Each rule's conclusions as indices into
     /// it: `conclusions[conclusion_ranges[r]]`.
     term_strength: Vec<f64>,
-    term_offsets: Vec<usize>,
-    conclusions: Vec<usize>,
-    conclusion_ranges: Vec<Range<usize>>,
+    pub(super) term_offsets: Vec<usize>,
+    pub(super) conclusions: Vec<usize>,
+    pub(super) conclusion_ranges: Vec<Range<usize>>,
     /// Zero between calls (each call clears the range it wrote).
     aggregate: Vec<f64>,
 }

@@ -17,13 +17,13 @@ use super::terms::Variable;
 /// The rule table over the inputs' partitions.
 #[derive(Clone, Debug)]
 pub struct RuleGrid {
-    partitions: Vec<Partition>,
+    pub(super) partitions: Vec<Partition>,
     /// Cell of term indices (k_0, k_1, …) at Σ k_i·stride_i; its rules are
     /// rules[cells[c]..cells[c + 1]].
-    strides: Vec<usize>,
-    cells: Vec<usize>,
-    rules: Vec<usize>,
-    product: bool,
+    pub(super) strides: Vec<usize>,
+    pub(super) cells: Vec<usize>,
+    pub(super) rules: Vec<usize>,
+    pub(super) product: bool,
     /// Per input, the located term and its two memberships (work buffer).
     located: Vec<(usize, f64, f64)>,
 }
@@ -161,6 +161,6 @@ impl RuleGrid {
 /// `terms[from..to]` for the cell's (from, to).
 #[derive(Clone, Debug)]
 pub struct TermsByCell {
-    cells: Vec<(usize, usize)>,
-    terms: Vec<usize>,
+    pub(super) cells: Vec<(usize, usize)>,
+    pub(super) terms: Vec<usize>,
 }

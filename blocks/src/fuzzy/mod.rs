@@ -2,6 +2,7 @@
 //! system described in YAML (variables, terms, rules as tables or as
 //! sentences), compiled once and evaluated without allocation.
 
+mod c_form;
 mod centroid;
 pub mod fis;
 mod grid;
@@ -45,12 +46,13 @@ pub const TYPES: &[BlockType] = &[BlockType {
             .kind(ParamKind::Structure),
         param("rules", Required, "mapping output -> table, or a list of `if … then …` sentences")
             .kind(ParamKind::Structure),
-        param("kind", Word("mamdani"), "mamdani | sugeno"),
-        param("and", Word("min"), "min | product"),
-        param("or", Word("max"), "max | probor"),
-        param("implication", Word("min"), "min | product"),
-        param("aggregation", Word("max"), "max | sum"),
-        param("defuzzification", Word("centroid"), "centroid | bisector | mom | som | lom"),
+        param("kind", Word("mamdani"), "mamdani | sugeno").options(&["mamdani", "sugeno"]),
+        param("and", Word("min"), "min | product").options(&["min", "product"]),
+        param("or", Word("max"), "max | probor").options(&["max", "probor"]),
+        param("implication", Word("min"), "min | product").options(&["min", "product"]),
+        param("aggregation", Word("max"), "max | sum").options(&["max", "sum"]),
+        param("defuzzification", Word("centroid"), "centroid | bisector | mom | som | lom")
+            .options(&["centroid", "bisector", "mom", "som", "lom"]),
         param("resolution", Number(201.0), "points on each output universe (Mamdani)"),
         SAMPLE_TIME_INHERITED,
     ],
@@ -77,6 +79,9 @@ impl Block for FuzzyBlock {
         for (o, &v) in self.y.iter().enumerate() {
             io.set(o, v);
         }
+    }
+    fn c_form(&self, c: &mut ctlgraph_core::codegen::c::CBlock) -> Result<(), ctlgraph_core::codegen::c::NoCForm> {
+        self.fis.c_form(c)
     }
 }
 
