@@ -187,3 +187,62 @@ fn a_one_sample_spike_survives_the_decimation(page: &mut Chromium, dir: &Path) {
     assert!(at_spike < 0.1, "the spike reaches {at_spike} of the height from the top");
     assert!(elsewhere > 0.85, "the line elsewhere is at {elsewhere}");
 }
+
+/// `ctlgraph watch --html … --serve 0` in the browser: the served report
+/// reloads itself when a file the graph reads (here a subsystem file) is
+/// saved, showing the new run's numbers; Ctrl-C ends the watch with exit 0.
+#[test]
+fn the_watched_report_reloads_itself_in_a_browser() {
+    use std::io::BufRead;
+    let dir = tempfile::tempdir().unwrap();
+    let graph = dir.path().join("g.yaml");
+    std::fs::write(
+        &graph,
+        "blocks:\n  u: { type: step }\n  p: { type: subsystem, file: lag.yaml }\nwires:\n  - u -> p\nrecord: [y: p]\n\
+         simulation: { stop: 1, solver: { method: rk4, step: 0.01 } }\nchecks:\n  - \"final_value(y) > 1\"\n",
+    )
+    .unwrap();
+    let lag = dir.path().join("lag.yaml");
+    let lag_text = |k: u32| {
+        format!(
+            "blocks:\n  u: {{ type: inport }}\n  g: {{ type: transfer_function, num: [{k}], den: [0.1, 1] }}\n  y: {{ type: outport }}\nwires:\n  - u -> g\n  - g -> y\n"
+        )
+    };
+    std::fs::write(&lag, lag_text(2)).unwrap();
+    let mut watch = std::process::Command::new(env!("CARGO_BIN_EXE_ctlgraph"))
+        .args(["watch", "g.yaml", "--html", "g.html", "--serve", "0"])
+        .current_dir(dir.path())
+        .env("CI", "1")
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = std::io::BufReader::new(watch.stdout.take().unwrap()).lines().map(Result::unwrap);
+    let mut wait_for =
+        |what: &str| -> String { lines.by_ref().find(|l| l.contains(what)).unwrap_or_else(|| panic!("no `{what}`")) };
+    let url = wait_for("serving the report at ").rsplit(' ').next().unwrap().to_string();
+    assert!(wait_for("measured").contains("measured 1.99991"));
+    wait_for("file(s) watched");
+
+    let profile = tempfile::tempdir().unwrap();
+    let mut page = Chromium::launch(&chromium(), profile.path(), (1000, 700));
+    page.open(&url, "document.body.dataset.ready");
+    // The check's measured value as the report's table prints it (1.999909).
+    assert!(page.eval("document.body.innerText").as_str().unwrap().contains("1.99990"));
+    // A mark on the page that a reload wipes out.
+    page.eval("window.notReloaded = true");
+    std::fs::write(&lag, lag_text(4)).unwrap();
+    assert!(wait_for("measured").contains("measured 3.99982"));
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    // While the page reloads there is a moment without a body, or without a page to ask.
+    let reloaded = "window.notReloaded === undefined && document.readyState === 'complete' && !!(document.body && document.body.dataset.ready)";
+    while page.eval_while_loading(reloaded) != Value::Bool(true) {
+        assert!(std::time::Instant::now() < deadline, "the page did not reload");
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    assert!(page.eval("document.body.innerText").as_str().unwrap().contains("3.99981"));
+
+    // SAFETY: a signal to the child this test started and still owns.
+    unsafe { libc::kill(watch.id() as i32, libc::SIGINT) };
+    assert!(wait_for("watch: stopped").contains("stopped"));
+    assert!(watch.wait().unwrap().success());
+}

@@ -100,6 +100,13 @@ impl Chromium {
     /// Sends one command (to the page's session, or to the browser)
     /// and waits for its reply, passing over events; panics on an error.
     fn send(&mut self, to_page: bool, method: &str, params: Value) -> Value {
+        let reply = self.send_for_reply(to_page, method, params);
+        assert!(reply["error"].is_null(), "{method}: {}", reply["error"]);
+        reply["result"].clone()
+    }
+
+    /// The whole reply to one command, an error included.
+    fn send_for_reply(&mut self, to_page: bool, method: &str, params: Value) -> Value {
         self.next_id += 1;
         let id = self.next_id;
         let mut message = json!({ "id": id, "method": method, "params": params });
@@ -115,8 +122,7 @@ impl Chromium {
             let reply =
                 self.replies.recv_timeout(left).unwrap_or_else(|_| panic!("no reply to {method} in {TIMEOUT:?}"));
             if reply["id"] == id {
-                assert!(reply["error"].is_null(), "{method}: {}", reply["error"]);
-                return reply["result"].clone();
+                return reply;
             }
         }
     }
@@ -133,6 +139,19 @@ impl Chromium {
             .call("Runtime.evaluate", json!({ "expression": expression, "returnByValue": true, "awaitPromise": true }));
         assert!(r["exceptionDetails"].is_null(), "{expression}: {}", r["exceptionDetails"]);
         r["result"]["value"].clone()
+    }
+
+    /// The value of a JavaScript expression, or null where it throws or
+    /// the page is being replaced (a reload in progress).
+    pub fn eval_while_loading(&mut self, expression: &str) -> Value {
+        let params = json!({ "expression": expression, "returnByValue": true, "awaitPromise": true });
+        let reply = self.send_for_reply(true, "Runtime.evaluate", params);
+        let r = &reply["result"];
+        if !reply["error"].is_null() || !r["exceptionDetails"].is_null() {
+            Value::Null
+        } else {
+            r["result"]["value"].clone()
+        }
     }
 
     /// Opens `url` and waits until `ready` (a JavaScript condition) holds.
