@@ -15,14 +15,17 @@ pub mod diagram;
 pub mod dot;
 pub mod fmu;
 pub mod html;
+pub mod lsp;
 pub mod plot;
 pub mod prop;
 pub mod record;
 pub mod reference;
 pub mod report;
+pub mod schema;
 pub mod suite;
 pub mod sweep;
 pub mod sweep_plot;
+pub mod target_c;
 pub mod toolchain;
 
 pub use ctlgraph_blocks as blocks;

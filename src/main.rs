@@ -2,19 +2,23 @@
 //! 2 the input is invalid (file, YAML, schema, graph, arguments).
 
 mod analysis_cmd;
+mod check_cmd;
+mod codegen_cmd;
 mod fmu_cmd;
 mod interrupt;
+mod library_cmd;
 mod progress;
 mod report_cmd;
 mod run_cmd;
 mod sweep_cmd;
+mod watch_cmd;
 
 use clap::{Parser, Subcommand};
 use ctlgraph::accel::Accelerate;
 use ctlgraph::prop::{PropConfig, PropOutcome, Vary};
 use ctlgraph::suite::Failure;
 use ctlgraph_core::flatten::parse_set;
-use ctlgraph_core::{Diagnostic, Model, Simulator};
+use ctlgraph_core::{Diagnostic, Model};
 use progress::CaseProgress;
 use run_cmd::AccelerateArg;
 use run_cmd::RunOptions;
@@ -156,16 +160,40 @@ enum Command {
         #[arg(long, value_name = "FILE.html")]
         html: PathBuf,
     },
-    /// Write the graph's step as Rust that calls its blocks directly (docs/compiled-step.md).
-    #[command(after_help = "Example:\n  ctlgraph codegen graphs/fladrc/ladrc.yaml --out src/ladrc_step.rs\n\n\
-                      The module defines `Step`; run it with `ctlgraph_core::codegen::Compiled::<Step>::new(&model, None)`.\n\
-                      Any graph: every solver, zero crossings, rows between steps; inports hold their given values.")]
+    /// Write the graph's step as Rust that calls its blocks directly (docs/compiled-step.md), or its sampled controller as C99 (`--target c`).
+    #[command(after_help = "Examples:\n  ctlgraph codegen graphs/fladrc/ladrc.yaml --out src/ladrc_step.rs\n  \
+                      ctlgraph codegen --target c graphs/fladrc/ladrc.yaml --subsystem ctrl --out ladrc_c --verify\n\n\
+                      Rust: the module defines `Step`; run it with `ctlgraph_core::codegen::Compiled::<Step>::new(&model, None)`. \
+                      Any graph: every solver, zero crossings, rows between steps; inports hold their given values.\n\
+                      C: NAME.h and NAME.c for the blocks of a subsystem (or of the whole graph) that run at sample times; \
+                      --verify runs the graph and checks the C on the recorded inputs of every sample (README, \"C for a target\").")]
     Codegen {
         /// The graph file (YAML).
         graph: PathBuf,
-        /// Where to write the Rust module (standard output when omitted).
-        #[arg(long, value_name = "FILE.rs")]
+        /// What to generate.
+        #[arg(long, value_parser = ["rust", "c"], default_value = "rust")]
+        target: String,
+        /// Rust: the module's file (standard output when omitted). C: the folder for NAME.h and NAME.c.
+        #[arg(long, value_name = "FILE.rs|DIR")]
         out: Option<PathBuf>,
+        /// C: the top-level subsystem block that is the controller (default: the whole graph).
+        #[arg(long, value_name = "BLOCK")]
+        subsystem: Option<String>,
+        /// C: the prefix of the files, types and functions (default: the subsystem's or the graph file's name).
+        #[arg(long, value_name = "NAME")]
+        name: Option<String>,
+        /// C: the floating-point type.
+        #[arg(long = "float", value_parser = ["double", "single"], default_value = "double")]
+        float: String,
+        /// C: run the graph and compare the compiled C with it at every sample (SIL; exit 1 on a difference above the bound).
+        #[arg(long)]
+        verify: bool,
+        /// C, with --verify: also cross-compile for this CPU and run under QEMU (PIL).
+        #[arg(long, value_parser = ["cortex-m4"], value_name = "CPU")]
+        target_cpu: Option<String>,
+        /// C, with --verify: the largest |difference| accepted (default 0 for double: bit for bit; for single 1e-2 x the largest |output|).
+        #[arg(long, value_name = "TOL")]
+        tolerance: Option<f64>,
         /// Override a graph parameter (repeatable).
         #[arg(long = "set", value_name = "NAME=VALUE")]
         sets: Vec<String>,
@@ -253,6 +281,46 @@ enum Command {
         #[arg(long, conflicts_with = "type")]
         markdown: bool,
     },
+    /// Run the graph, then again on every save of it or of a file it reads, until Ctrl-C.
+    #[command(
+        after_help = "Example:\n  ctlgraph watch graphs/tutorial/pid_loop.yaml --plot out/pid.svg --html out/pid.html --serve 8350\n\n\
+                      Prints the summary and the checks after every run and rewrites the outputs. With --serve, \
+                      http://127.0.0.1:PORT/ shows the HTML report and reloads it after every run (port 0: any free port)."
+    )]
+    Watch {
+        /// The graph file (YAML).
+        graph: PathBuf,
+        /// Write the recorded signals as CSV after every run.
+        #[arg(long, value_name = "FILE.csv")]
+        out: Option<PathBuf>,
+        /// Draw the recorded signals as SVG after every run.
+        #[arg(long, value_name = "FILE.svg")]
+        plot: Option<PathBuf>,
+        /// Write the HTML report after every run.
+        #[arg(long, value_name = "FILE.html")]
+        html: Option<PathBuf>,
+        /// Serve the HTML report on 127.0.0.1:PORT, reloading itself after every run.
+        #[arg(long, value_name = "PORT")]
+        serve: Option<u16>,
+        /// Override a graph parameter (repeatable).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        sets: Vec<String>,
+    },
+    /// Serve graph files to an editor: the Language Server Protocol over stdio (diagnostics, hover, completion, definition, symbols).
+    #[command(
+        after_help = "Run by the editor, not by hand: README, \"Editing graphs\", has the settings for VS Code, Neovim and Helix."
+    )]
+    Lsp,
+    /// Print the JSON Schema of graph files, for editors' YAML support (validation, completion, hover).
+    #[command(after_help = "Example:\n  ctlgraph schema --out ctlgraph.schema.json\n\n\
+                      Then, as the first line of a graph file:\n  \
+                      # yaml-language-server: $schema=ctlgraph.schema.json\n\
+                      (README, \"Editing graphs\"). Draft-07, generated from the block library.")]
+    Schema {
+        /// Where to write it (standard output when omitted).
+        #[arg(long, value_name = "FILE.json")]
+        out: Option<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -285,11 +353,24 @@ fn main() -> ExitCode {
         Command::Sweep { merge: None, graph: None, .. } => {
             Err(Diagnostic::plain("sweep needs a graph file (or `sweep merge TABLES --out FILE`)").into())
         }
-        Command::Check { graph, sets } => check(&graph, &sets),
+        Command::Check { graph, sets } => check_cmd::check(&graph, &sets),
         Command::Linearize { select, out } => analysis_cmd::linearize(select, out.as_deref()),
         Command::Bode { select, grid } => analysis_cmd::bode(select, grid),
         Command::Poles { select } => analysis_cmd::poles(select),
-        Command::Codegen { graph, out, sets } => codegen(&graph, out.as_deref(), &sets),
+        Command::Codegen { graph, target, out, sets, subsystem, name, float, verify, target_cpu, tolerance } => {
+            codegen_cmd::codegen(codegen_cmd::Args {
+                graph: &graph,
+                c: target == "c",
+                out: out.as_deref(),
+                subsystem: subsystem.as_deref(),
+                name: name.as_deref(),
+                single: float == "single",
+                verify,
+                target_cpu: target_cpu.as_deref(),
+                tolerance,
+                sets: &sets,
+            })
+        }
         Command::Fmu { graph, out, fmi, sets } => fmu_cmd::fmu(&graph, &out, &fmi, &sets),
         Command::Dot { graph, sets } => compile(&graph, &sets).map(|m| print!("{}", ctlgraph::dot::to_dot(&m))),
         Command::Diagram { graph, svg, expand, sets } => diagram(&graph, &svg, expand, &sets),
@@ -298,7 +379,17 @@ fn main() -> ExitCode {
             print!("{}", ctlgraph::reference::markdown(&ctlgraph::registry()));
             Ok(())
         }
-        Command::Blocks { r#type, .. } => blocks(r#type.as_deref()),
+        Command::Blocks { r#type, .. } => library_cmd::blocks(r#type.as_deref()),
+        Command::Schema { out } => library_cmd::schema(out.as_deref()),
+        Command::Lsp => ctlgraph::lsp::serve_stdio().map_err(Failure::Run),
+        Command::Watch { graph, out, plot, html, serve, sets } => watch_cmd::watch(watch_cmd::Args {
+            graph: &graph,
+            out: out.as_deref(),
+            plot: plot.as_deref(),
+            html: html.as_deref(),
+            serve,
+            sets: &sets,
+        }),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -318,25 +409,21 @@ fn main() -> ExitCode {
     }
 }
 
-fn compile(graph: &Path, sets: &[String]) -> Result<Model, Failure> {
-    let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
-    Ok(ctlgraph::compile_file(graph, &sets)?)
-}
-
-fn codegen(graph: &Path, out: Option<&Path>, sets: &[String]) -> Result<(), Failure> {
-    if let Some(path) = out.filter(|p| run_cmd::same_file(p, graph)) {
-        return Err(Diagnostic::plain(format!("--out {}: that is the graph file", path.display())).into());
-    }
-    let model = compile(graph, sets)?;
-    let code = ctlgraph_core::codegen::generate(&model);
+/// `text` written to `out` whole (or not at all), or printed without it.
+fn write_or_print(out: Option<&Path>, text: &str) -> Result<(), Failure> {
     match out {
-        Some(path) => ctlgraph::record::write_atomic(path, code.as_bytes())
+        Some(path) => ctlgraph::record::write_atomic(path, text.as_bytes())
             .map_err(|e| Failure::Run(format!("{}: {e}", path.display()))),
         None => {
-            print!("{code}");
+            print!("{text}");
             Ok(())
         }
     }
+}
+
+fn compile(graph: &Path, sets: &[String]) -> Result<Model, Failure> {
+    let sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
+    Ok(ctlgraph::compile_file(graph, &sets)?)
 }
 
 fn diagram(graph: &Path, svg: &Path, expand: bool, sets: &[String]) -> Result<(), Failure> {
@@ -347,135 +434,6 @@ fn diagram(graph: &Path, svg: &Path, expand: bool, sets: &[String]) -> Result<()
     ctlgraph::record::write_atomic(svg, ctlgraph::diagram::to_svg(&d).as_bytes())
         .map_err(|e| Failure::Run(format!("{}: {e}", svg.display())))?;
     println!("{}: {} boxes, {} wires", svg.display(), d.nodes.len(), d.wires.len());
-    Ok(())
-}
-
-fn check(graph: &Path, sets: &[String]) -> Result<(), Failure> {
-    let parsed_sets = sets.iter().map(|s| parse_set(s)).collect::<Result<Vec<_>, _>>()?;
-    let flat = ctlgraph_core::load(graph, &parsed_sets)?;
-    let ports = |ty: &str| -> Vec<String> {
-        flat.blocks.iter().filter(|b| b.spec.type_name == ty && !b.path.contains('/')).map(|b| b.path.clone()).collect()
-    };
-    let (inports, outports) = (ports("inport"), ports("outport"));
-    // A file with ports runs on its own (they are then its inputs and
-    // outputs, for a program driving it) or is a subsystem: when it does
-    // not compile alone, check it as one.
-    let model = match ctlgraph_core::compile(&flat, &ctlgraph::registry()) {
-        Ok(model) => model,
-        Err(_) if !inports.is_empty() || !outports.is_empty() => {
-            return check_subsystem(graph, &inports, &outports);
-        }
-        Err(d) => return Err(d.into()),
-    };
-    println!("{}: ok", graph.display());
-    if !inports.is_empty() || !outports.is_empty() {
-        let list = |names: &[String]| if names.is_empty() { "(none)".to_string() } else { names.join(", ") };
-        println!("inputs:  {} (set by a program driving the graph; a subsystem's inports)", list(&inports));
-        println!("outputs: {}", list(&outports));
-    }
-    for c in &model.checks {
-        if let Some(problem) = c.window_problem(model.sim.stop) {
-            println!("  warning: check `{}`: {problem}: it will be skipped", c.name);
-        }
-    }
-    for w in &model.warnings {
-        println!("  warning: {w}");
-    }
-    println!("execution order:");
-    let width = model.meta.iter().map(|m| m.name.len()).max().unwrap_or(0);
-    for (i, m) in model.meta.iter().enumerate() {
-        let zoh = if m.exact_zoh {
-            format!(", exact ZOH at {}", ctlgraph::record::Number(model.sim.method.max_step()))
-        } else {
-            String::new()
-        };
-        println!("  {:>3}  {:<width$}  {:<26}  {}{zoh}", i + 1, m.name, m.type_name, m.sample_time);
-    }
-    for (name, report) in model.build_reports() {
-        println!("{name}: {report}");
-    }
-    let solver = model.sim.method;
-    let held = model.n_states - model.integrated_states();
-    let held = if held > 0 { format!(" ({held} stepped by exact ZOH)") } else { String::new() };
-    println!(
-        "{} blocks, {} continuous states{held}, {} signal values, {} sample rate(s); solver {}, stop {} s",
-        model.meta.len(),
-        model.n_states,
-        model.signal_len,
-        model.clocks.len(),
-        solver.name(),
-        ctlgraph::record::Number(model.sim.stop)
-    );
-    let sim = Simulator::new(model, None);
-    let floor = if sim.method().is_adaptive() { "at least" } else { "about" };
-    println!("{floor} {} major steps to the stop time", ctlgraph::record::Number(sim.expected_major_steps()));
-    if let Some(w) = run_cmd::long_run_warning(&sim) {
-        println!("warning: {w}");
-    }
-    Ok(())
-}
-
-/// A subsystem file checked on its own: compiled inside a wrapper that
-/// feeds each inport a constant, so its interface and insides are
-/// validated as an including graph would see them.
-fn check_subsystem(graph: &Path, inports: &[String], outports: &[String]) -> Result<(), Failure> {
-    let file = graph.canonicalize().map_err(|e| Diagnostic::plain(format!("{}: {e}", graph.display())))?;
-    let mut blocks = format!("  sub: {{ type: subsystem, file: \"{}\" }}\n", file.display());
-    let mut wires = Vec::new();
-    for (k, name) in inports.iter().enumerate() {
-        blocks.push_str(&format!("  in{k}: {{ type: constant, value: 0 }}\n"));
-        wires.push(format!("in{k} -> sub.{name}"));
-    }
-    let text = format!("blocks:\n{blocks}wires: [{}]\n", wires.join(", "));
-    // The wrapper has a name of its own: the loader must not take it for
-    // the subsystem file it includes.
-    let model = ctlgraph::compile_str(&text, &format!("{} (as a subsystem)", graph.display()), &[])?;
-    println!("{}: ok as a subsystem", graph.display());
-    println!("  inports:  {}", if inports.is_empty() { "(none)".into() } else { inports.join(", ") });
-    println!("  outports: {}", if outports.is_empty() { "(none)".into() } else { outports.join(", ") });
-    println!("{} blocks inside, {} continuous states", model.meta.len() - inports.len(), model.n_states);
-    Ok(())
-}
-
-fn blocks(ty: Option<&str>) -> Result<(), Failure> {
-    let reg = ctlgraph::registry();
-    let Some(name) = ty else {
-        let mut categories: Vec<&str> = reg.types().map(|t| t.category).collect();
-        categories.sort();
-        categories.dedup();
-        for cat in categories {
-            println!("{cat}:");
-            for t in reg.types().filter(|t| t.category == cat) {
-                println!("  {:<28} {}", t.name, t.summary);
-            }
-        }
-        println!("\n`ctlgraph blocks TYPE` documents one type.");
-        return Ok(());
-    };
-    let Some(t) = reg.get(name) else {
-        return Err(Diagnostic::plain(format!("no block type `{name}`")).suggest(name, reg.names()).into());
-    };
-    println!("{} ({})\n\n{}\n\n{}\n", t.name, t.category, t.summary, t.doc);
-    for (title, ports) in [("inputs", t.inputs), ("outputs", t.outputs)] {
-        println!("{title}:");
-        if ports.is_empty() {
-            println!("  (none)");
-        }
-        for p in ports {
-            println!("  {:<14} {}", p.name, p.doc);
-        }
-    }
-    println!("parameters:");
-    if t.params.is_empty() {
-        println!("  (none)");
-    }
-    for p in t.params {
-        let default = match p.default {
-            ctlgraph_core::ParamDefault::Required => "required".to_string(),
-            value => format!("default {value}"),
-        };
-        println!("  {:<14} {:<11} {:<18} {}", p.name, p.kind.name(), default, ctlgraph::reference::doc_text(p));
-    }
     Ok(())
 }
 

@@ -23,6 +23,9 @@ pub fn markdown(reg: &Registry) -> String {
             for para in t.doc.split('\n') {
                 let _ = writeln!(out, "{}\n", para.trim());
             }
+            if has_c_form(t.name) {
+                out.push_str("C form: yes (`ctlgraph codegen --target c`).\n\n");
+            }
             for (title, ports) in [("Inputs", t.inputs), ("Outputs", t.outputs)] {
                 if ports.is_empty() {
                     let _ = writeln!(out, "{title}: none.\n");
@@ -57,6 +60,11 @@ pub fn markdown(reg: &Registry) -> String {
         }
     }
     out
+}
+
+/// Whether blocks of type `name` can be generated as C.
+pub fn has_c_form(name: &str) -> bool {
+    ctlgraph_blocks::TYPES_WITH_C_FORM.contains(&name)
 }
 
 /// A parameter's doc as `ctlgraph blocks TYPE` prints it: with its unit.
