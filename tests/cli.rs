@@ -496,3 +496,14 @@ fn blocks_lists_optional_parameters_with_their_default() {
         assert!(!line.contains("required") && line.contains("default 1 for each of"), "{line}");
     }
 }
+
+#[test]
+fn watch_serves_only_a_report_it_writes() {
+    let out = ctlgraph(&["watch", "graphs/tutorial/pid_loop.yaml", "--serve", "0"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).contains("--serve serves the HTML report: give --html FILE.html too"),
+        "{}",
+        text(&out.stderr)
+    );
+}

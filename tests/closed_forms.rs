@@ -176,3 +176,49 @@ fn event_only_blocks_switch_exactly_at_their_events() {
     }
     assert!(trace.t().contains(&0.25) && trace.t().contains(&0.15), "events are major steps");
 }
+
+/// The quantizer is q·round(u/q) on a ramp (halves away from zero); the
+/// Coulomb and viscous friction gain·u + sign(u)·offset on a sine, its
+/// jump located at the sine's zero (t = 0.5 s) under an adaptive solver.
+#[test]
+fn quantizer_and_friction_closed_forms() {
+    let trace = common::run(
+        "simulation: { stop: 1.0, solver: { method: dopri5, rtol: 1e-9, max_step: 0.01 } }\nblocks:\n  r: { type: ramp, slope: 3, start: 0 }\n\
+         \x20 off: { type: constant, value: -1.5 }\n  shifted: { type: sum, signs: '++' }\n\
+         \x20 q: { type: quantizer, interval: 0.5 }\n  s: { type: sine, frequency: 1 }\n\
+         \x20 fr: { type: coulomb_viscous_friction, offset: 0.2, gain: 2 }\n\
+         wires:\n  - r -> shifted.u1\n  - off -> shifted.u2\n  - shifted -> q\n  - s -> fr\nrecord: [shifted, q, s, fr]\n",
+    );
+    let (u, q) = (trace.column("shifted").unwrap(), trace.column("q").unwrap());
+    for (u, q) in u.iter().zip(q) {
+        assert_eq!(*q, 0.5 * (u / 0.5).round(), "u = {u}");
+    }
+    let (t, s, fr) = (trace.t(), trace.column("s").unwrap(), trace.column("fr").unwrap());
+    for k in 1..t.len() {
+        // A located step ends at the zero, where the new sign is taken: check the steps' values.
+        let sign = if s[k] > 0.0 {
+            1.0
+        } else if s[k] < 0.0 {
+            -1.0
+        } else {
+            0.0
+        };
+        if (t[k] - 0.5).abs() > 1e-6 {
+            assert!(
+                (fr[k] - (2.0 * s[k] + sign * 0.2)).abs() < 1e-12,
+                "t = {}: {} vs {}",
+                t[k],
+                fr[k],
+                2.0 * s[k] + sign * 0.2
+            );
+        }
+    }
+    // (Not the start: sin 0 = 0 gives 0, the first step then +0.2.)
+    let jump = t
+        .windows(2)
+        .zip(fr.windows(2))
+        .find(|(t, f)| t[0] > 0.1 && (f[1] - f[0]).abs() > 0.3)
+        .map(|(t, _)| t[1])
+        .unwrap();
+    assert!((jump - 0.5).abs() < 1e-9, "the jump at {jump}");
+}

@@ -236,3 +236,85 @@ fn grid_times_read_as_the_grid() {
     assert_eq!(trace.column("z").unwrap()[47], 0.47);
     assert!(t.iter().enumerate().all(|(k, &tk)| tk == k as f64 / 100.0));
 }
+
+/// A unit step through an FIR filter: y(k) = b_0 + … + b_k, then Σ b;
+/// through a moving average of N: y(k) = (k + 1)/N, then 1 — and both
+/// start from their initial inputs (here 0).
+#[test]
+fn fir_and_moving_average_step_responses() {
+    let trace = common::run(
+        "simulation: { stop: 0.1, solver: { method: rk4, step: 0.01 } }\nblocks:\n  u: { type: step }\n\
+         \x20 f: { type: discrete_fir, coefficients: [0.5, 0.25, -0.125, 2], sample_time: 0.01 }\n\
+         \x20 m: { type: moving_average, window: 4, sample_time: 0.01 }\n\
+         wires:\n  - u -> f, m\nrecord: [f, m]\n",
+    );
+    let (f, m) = (trace.column("f").unwrap(), trace.column("m").unwrap());
+    let partial = [0.5, 0.75, 0.625, 2.625];
+    for k in 0..11 {
+        assert_eq!(f[k], partial[k.min(3)], "fir at sample {k}");
+        assert_eq!(m[k], ((k + 1).min(4) as f64) / 4.0, "moving average at sample {k}");
+    }
+}
+
+/// The discrete integrator's three methods on a ramp u = t, K = 2, T =
+/// 0.1: forward Euler y(k) = K·T·Σ_{i<k} u(i) = K·T²·k(k−1)/2, backward
+/// y(k) = K·T²·k(k+1)/2, trapezoidal the exact K·t²/2; a limit holds y and
+/// the state (no wind-up: it leaves the limit as soon as u turns); a
+/// rising reset sets the state back to its initial value at that sample.
+#[test]
+fn discrete_integrator_methods_limits_and_reset() {
+    let trace = common::run(
+        "simulation: { stop: 1.0, solver: { method: rk4, step: 0.1 } }\nblocks:\n  u: { type: ramp, slope: 1 }\n\
+         \x20 f: { type: discrete_integrator, method: forward_euler, gain: 2, sample_time: 0.1 }\n\
+         \x20 b: { type: discrete_integrator, method: backward_euler, gain: 2, sample_time: 0.1 }\n\
+         \x20 tr: { type: discrete_integrator, method: trapezoidal, gain: 2, sample_time: 0.1 }\n\
+         \x20 one: { type: constant, value: 1 }\n  turn: { type: step, at: 0.55, value: -2 }\n  v: { type: sum, signs: '++' }\n\
+         \x20 lim: { type: discrete_integrator, upper: 0.35, sample_time: 0.1 }\n\
+         \x20 kick: { type: step, at: 0.55 }\n\
+         \x20 re: { type: discrete_integrator, initial: 1, reset: rising, sample_time: 0.1 }\n\
+         wires:\n  - u -> f, b, tr\n  - one -> v.u1\n  - turn -> v.u2\n  - v -> lim, re.u\n  - kick -> re.reset\n\
+         record: [f, b, tr, lim, re]\n",
+    );
+    // One row per sample k (the steps at 0.55 s add a row between samples).
+    let t = trace.t();
+    let rows: Vec<usize> =
+        (0..=10).map(|k| t.iter().rposition(|&t| (t - 0.1 * k as f64).abs() < 1e-9).unwrap()).collect();
+    let col = |c: &str| rows.iter().map(|&i| trace.column(c).unwrap()[i]).collect::<Vec<f64>>();
+    let (f, b, tr, lim, re) = (col("f"), col("b"), col("tr"), col("lim"), col("re"));
+    for k in 0..=10 {
+        let k_ = k as f64;
+        assert!((f[k] - 0.02 * k_ * (k_ - 1.0) / 2.0).abs() < 1e-12, "forward at {k}: {}", f[k]);
+        assert!((b[k] - 0.02 * k_ * (k_ + 1.0) / 2.0).abs() < 1e-12, "backward at {k}: {}", b[k]);
+        assert!((tr[k] - (0.1 * k_).powi(2)).abs() < 1e-12, "trapezoidal at {k}: {}", tr[k]);
+    }
+    // u = 1 until 0.55, then -1: 0, 0.1, 0.2, 0.3, 0.35 (held), 0.35, then down at once.
+    let want = [0.0, 0.1, 0.2, 0.3, 0.35, 0.35, 0.35, 0.25, 0.15, 0.05, -0.05];
+    for (k, w) in want.iter().enumerate() {
+        assert!((lim[k] - w).abs() < 1e-12, "limited at {k}: {} vs {w}", lim[k]);
+    }
+    // From 1, +0.1 a sample; the kick's rising edge at 0.6 sets it back to 1, then down by 0.1.
+    let want = [1.0, 1.1, 1.2, 1.3, 1.4, 1.5, 1.0, 0.9, 0.8, 0.7, 0.6];
+    for (k, w) in want.iter().enumerate() {
+        assert!((re[k] - w).abs() < 1e-12, "reset at {k}: {} vs {w}", re[k]);
+    }
+}
+
+/// Memory: the input of the previous major step, whatever the steps (the
+/// adaptive solver's, cut at a pulse's edges), `initial` at the first;
+/// ground gives zeros and a terminator ends a signal.
+#[test]
+fn memory_holds_the_previous_major_steps_input() {
+    let trace = common::run(
+        "simulation: { stop: 1.0, solver: { method: dopri5, max_step: 0.03 } }\nblocks:\n  u: { type: sine, frequency: 1.3 }\n\
+         \x20 p: { type: pulse, period: 0.3, duty: 0.5, delay: 0.05 }\n  s: { type: sum, signs: '++' }\n\
+         \x20 m: { type: memory, initial: 7 }\n  g: { type: ground, width: 2 }\n  end: { type: terminator }\n\
+         wires:\n  - u -> s.u1\n  - p -> s.u2\n  - s -> m\n  - g -> end\nrecord: [s, m, g]\n",
+    );
+    let (s, m) = (trace.column("s").unwrap(), trace.column("m").unwrap());
+    assert_eq!(m[0], 7.0);
+    for k in 1..s.len() {
+        assert_eq!(m[k], s[k - 1], "row {k}");
+    }
+    assert!(trace.t().len() > 30, "{} rows", trace.t().len());
+    assert!(trace.column("g[1]").unwrap().iter().chain(trace.column("g[2]").unwrap()).all(|&v| v == 0.0));
+}

@@ -217,3 +217,27 @@ fn fixed_step_methods_locate_crossings_when_asked() {
     let late = hit_times(&trace, "impact");
     assert!(late[0] > first && late[0] - first < 0.01 + 1e-12, "{}", late[0]);
 }
+
+/// A relational operator under an adaptive solver switches where its
+/// inputs cross, located as a zero crossing: sin(2π·0.5·t) > 0.5 first
+/// holds at t = asin(0.5)/π = 1/6 s and stops at 5/6 s; `and` with
+/// t < 0.6 (a ramp against 0.6) ends the window at 0.6 s.
+#[test]
+fn relational_and_logical_operators_switch_at_the_crossings() {
+    let trace = run("simulation: { stop: 1.0, solver: { method: dopri5, rtol: 1e-9, max_step: 0.05 } }\n\
+                     blocks:\n  s: { type: sine, frequency: 0.5 }\n  above: { type: relational_operator, op: '>', constant: 0.5 }\n\
+                     \x20 t: { type: ramp, slope: 1 }\n  early: { type: relational_operator, op: '<', constant: 0.6 }\n\
+                     \x20 both: { type: logical_operator, op: and }\n\
+                     wires:\n  - s -> above\n  - t -> early\n  - above -> both.u1\n  - early -> both.u2\n\
+                     record: [above, both]\n");
+    let switches = |column: &str| -> Vec<f64> {
+        let y = trace.column(column).unwrap();
+        trace.t().windows(2).zip(y.windows(2)).filter(|(_, v)| v[0] != v[1]).map(|(t, _)| t[1]).collect()
+    };
+    let above = switches("above");
+    assert_eq!(above.len(), 2, "{above:?}");
+    assert!((above[0] - 1.0 / 6.0).abs() < 1e-9 && (above[1] - 5.0 / 6.0).abs() < 1e-9, "{above:?}");
+    let both = switches("both");
+    assert_eq!(both.len(), 2, "{both:?}");
+    assert!((both[0] - 1.0 / 6.0).abs() < 1e-9 && (both[1] - 0.6).abs() < 1e-9, "{both:?}");
+}
