@@ -155,3 +155,23 @@ fn the_block_reference_page_is_the_library_as_it_is() {
         assert!(page.contains(entry), "docs/blocks.md lacks {entry}");
     }
 }
+
+/// Every ctlgraph name in the README's "Coming from Simulink" table is a
+/// registered block type (the table's section names aside).
+#[test]
+fn the_simulink_table_names_registered_types() {
+    let start = README.find("| Simulink | ctlgraph |").expect("the table");
+    let registry = ctlgraph::registry();
+    let sections = ["scopes:", "record:", "--plot", "--out", "constant:"];
+    let mut named = 0;
+    for row in README[start..].lines().skip(2).take_while(|l| l.starts_with('|')) {
+        let ours = row.split('|').nth(2).unwrap();
+        for name in ours.split('`').skip(1).step_by(2) {
+            if !sections.contains(&name) {
+                assert!(registry.get(name).is_some(), "`{name}` in the Simulink table is not a block type");
+                named += 1;
+            }
+        }
+    }
+    assert!(named > 50, "{named} names");
+}
