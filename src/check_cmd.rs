@@ -3,7 +3,7 @@
 //! one.
 
 use ctlgraph::suite::Failure;
-use ctlgraph_core::flatten::parse_set;
+use ctlgraph_core::flatten::{AlgebraicLoops, parse_set};
 use ctlgraph_core::{Diagnostic, Simulator};
 use std::path::Path;
 
@@ -37,6 +37,12 @@ pub(crate) fn check(graph: &Path, sets: &[String]) -> Result<(), Failure> {
     }
     for w in &model.warnings {
         println!("  warning: {w}");
+    }
+    // Under `algebraic_loops: warn` the warnings above list them already.
+    if model.sim.algebraic_loops == AlgebraicLoops::Solve {
+        for l in &model.algebraic_loops {
+            println!("  {l}");
+        }
     }
     println!("execution order:");
     let width = model.meta.iter().map(|m| m.name.len()).max().unwrap_or(0);

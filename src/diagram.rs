@@ -61,8 +61,14 @@ const SHOWN_PARAMS: usize = 3;
 /// The diagram of `flat` (as loaded) compiled as `model`: subsystems
 /// collapsed to one box each unless `expand`.
 pub fn build(flat: &FlatGraph, model: &Model, expand: bool) -> Diagram {
-    let ports: HashMap<&str, (&[String], &[String])> =
-        model.meta.iter().map(|m| (m.name.as_str(), (&m.input_names[..], &m.output_names[..]))).collect();
+    // A block inside an algebraic loop's block is drawn as itself.
+    let members = model.loop_members.iter().map(|m| (m.name.as_str(), (&m.input_names[..], &m.output_names[..])));
+    let ports: HashMap<&str, (&[String], &[String])> = model
+        .meta
+        .iter()
+        .map(|m| (m.name.as_str(), (&m.input_names[..], &m.output_names[..])))
+        .chain(members)
+        .collect();
     let top_subsystems: HashMap<&str, &(Vec<String>, Vec<String>)> =
         flat.subsystems.iter().filter(|(s, _)| !s.contains('/')).map(|(s, p)| (s.as_str(), p)).collect();
     let mut nodes: Vec<Node> = Vec::new();

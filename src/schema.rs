@@ -149,6 +149,10 @@ fn simulation() -> Value {
         "accelerate" => {
             json!({ "enum": [true, false, "on", "off", "require"], "description": "run the generated step (README, Accelerated runs)" })
         }
+        "algebraic_loops" => json!({
+            "enum": ["solve", "warn", "error"],
+            "description": "a loop of feedthrough blocks: solved (warn, the default, says so once) or refused"
+        }),
         "output" => json!({
             "type": "object",
             "additionalProperties": false,

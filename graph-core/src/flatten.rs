@@ -16,7 +16,7 @@ mod simulation;
 use includes::{IncludeError, Includes};
 pub use output::{MAX_REFINE, OutputTimes};
 use simulation::sim_config;
-pub use simulation::{Accelerate, METHODS, SIM_KEYS, SOLVER_KEYS, SimConfig, ZeroCrossing};
+pub use simulation::{Accelerate, AlgebraicLoops, METHODS, SIM_KEYS, SOLVER_KEYS, SimConfig, ZeroCrossing};
 
 /// Block types the loader and compiler treat specially.
 pub const SUBSYSTEM: &str = "subsystem";

@@ -6,10 +6,12 @@
 //! subsystems) → [`compile::compile`] (blocks from a [`Registry`], wiring,
 //! widths, rates, execution order) → [`sim::Simulator`].
 
+pub mod algebraic;
 pub mod block;
 pub mod checks;
 pub mod codegen;
 pub mod compile;
+pub mod dense;
 pub mod diag;
 pub mod expr;
 pub mod files;

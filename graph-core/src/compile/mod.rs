@@ -6,17 +6,18 @@
 mod advice;
 mod between;
 mod external;
+mod loops;
 mod reuse;
 mod schedule;
 mod wiring;
 
 use crate::block::{Block, Interface, Port, SampleTime, Width};
 use crate::diag::{Diagnostic, Pos};
-use crate::flatten::{FlatBlock, FlatGraph, INPORT, MAX_STEPS, SimConfig};
+use crate::flatten::{AlgebraicLoops, FlatBlock, FlatGraph, INPORT, MAX_STEPS, SimConfig};
 use crate::registry::Registry;
 pub(crate) use between::Between;
 pub use reuse::{recompile, reuse_structure};
-use schedule::{resolve_rates, sort};
+use schedule::{feedthrough_loops, loop_error, resolve_rates, sort};
 use std::collections::HashMap;
 use std::ops::Range;
 use wiring::{connect, instantiate, record_columns, resolve_drivers, resolve_widths};
@@ -50,6 +51,19 @@ pub struct BlockMeta {
     /// Its interface declares the outputs constant between major steps
     /// while the inputs are ([`crate::Interface::piecewise_constant`]).
     pub piecewise_constant: bool,
+}
+
+/// A block running inside an algebraic loop's block: its names, and where
+/// its outputs are in the signal buffer.
+#[derive(Clone, Debug)]
+pub struct LoopMember {
+    pub name: String,
+    pub type_name: String,
+    /// The loop's block, an index into [`Model::meta`].
+    pub loop_block: usize,
+    pub input_names: Vec<String>,
+    pub output_names: Vec<String>,
+    pub outputs: Vec<Port>,
 }
 
 /// The part of [`BlockMeta`] the step loop reads, kept compact and
@@ -127,6 +141,12 @@ pub struct Model {
     pub loop_dead_time: Option<(f64, usize)>,
     /// What `check` and `run` warn about (module `advice`).
     pub warnings: Vec<String>,
+    /// Each algebraic loop solved at every evaluation, as `check` lists
+    /// it: its blocks and the signals it is solved for.
+    pub algebraic_loops: Vec<String>,
+    /// The blocks that run inside an algebraic loop's block, which
+    /// [`Model::meta`] lists in their place.
+    pub loop_members: Vec<LoopMember>,
     /// What another loaded graph must share to be compiled on this one's
     /// structure ([`recompile`]).
     pub(crate) structure: reuse::Structure,
@@ -138,6 +158,11 @@ struct Node<'g> {
     block: Option<Box<dyn Block>>,
     is_virtual: bool,
     width: Option<usize>,
+    /// An algebraic loop's block ([`loops`]): its name (`flat` is its first
+    /// member's, for positions).
+    label: Option<String>,
+    /// A member of an algebraic loop: it runs inside the loop's block.
+    absorbed: bool,
 }
 
 /// Where a real input gets its value: a real block's output port, and the
@@ -154,8 +179,16 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let mut nodes = instantiate(g, reg)?;
     let index: HashMap<&str, usize> = nodes.iter().enumerate().map(|(i, n)| (n.flat.path.as_str(), i)).collect();
     let direct = connect(g, &nodes, &index)?;
-    let drivers = resolve_drivers(&nodes, &direct)?;
+    let mut drivers = resolve_drivers(&nodes, &direct)?;
     resolve_widths(&mut nodes, &drivers)?;
+    let found = feedthrough_loops(&nodes, &drivers);
+    if !found.is_empty() && g.sim.algebraic_loops == AlgebraicLoops::Error {
+        return Err(loop_error(&nodes, &found));
+    }
+    let mut collapsed = Vec::with_capacity(found.len());
+    for l in &found {
+        collapsed.push(loops::collapse(&mut nodes, &mut drivers, l, loop_tolerance(&g.sim.method))?);
+    }
     let order = sort(&nodes, &drivers)?;
     let (rates, clocks) = resolve_rates(&nodes, &drivers, &order);
     for (i, node) in nodes.iter().enumerate() {
@@ -179,6 +212,17 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
             signal_len += width;
         }
     }
+    // A loop's members' outputs are the loop block's.
+    for c in &collapsed {
+        for &((member, port), k) in &c.outputs {
+            let at = out_offset[c.node][k];
+            let ports = &mut out_offset[member];
+            if ports.len() <= port {
+                ports.resize(port + 1, at);
+            }
+            ports[port] = at;
+        }
+    }
     let mut model_blocks = Vec::with_capacity(order.len());
     let mut meta = Vec::with_capacity(order.len());
     let (mut in_ports, mut out_ports) = (Vec::new(), Vec::new());
@@ -200,8 +244,8 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         let ns = block.num_states();
         let rate = rates[&i];
         meta.push(BlockMeta {
-            name: node.flat.path.clone(),
-            type_name: node.flat.spec.type_name.clone(),
+            name: node.label.clone().unwrap_or_else(|| node.flat.path.clone()),
+            type_name: if node.label.is_some() { "algebraic_loop".into() } else { node.flat.spec.type_name.clone() },
             pos: node.flat.spec.pos.clone(),
             rate,
             sample_time: match rate {
@@ -281,9 +325,29 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         external_outputs,
         loop_dead_time: None,
         warnings: Vec::new(),
+        algebraic_loops: collapsed.iter().map(|c| c.description.clone()).collect(),
+        loop_members: collapsed
+            .iter()
+            .flat_map(|c| c.members.iter().map(move |&m| (c.node, m)))
+            .map(|(block, m)| LoopMember {
+                name: nodes[m].flat.path.clone(),
+                type_name: nodes[m].flat.spec.type_name.clone(),
+                loop_block: position[block],
+                input_names: nodes[m].iface.inputs.iter().map(|p| p.name.clone()).collect(),
+                output_names: nodes[m].iface.outputs.iter().map(|p| p.name.clone()).collect(),
+                outputs: out_offset[m].clone(),
+            })
+            .collect(),
         structure: reuse::Structure::of(g, &nodes, &order),
     };
     plan_and_advise(&mut model);
+    if g.sim.algebraic_loops == AlgebraicLoops::Warn {
+        let notes = model
+            .algebraic_loops
+            .iter()
+            .map(|d| format!("{d}; `algebraic_loops: solve` under `simulation:` silences this"));
+        model.warnings.extend(notes);
+    }
     if let Some(sel) = &model.analysis {
         for name in [&sel.input, &sel.output, &sel.open].into_iter().flatten() {
             if let Err(d) = model.signal_offset(name) {
@@ -293,6 +357,18 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         }
     }
     Ok(model)
+}
+
+/// How closely an algebraic loop's equations are solved: a thousandth of
+/// an adaptive method's relative tolerance (its error control then sees
+/// the loop's signals as exact), 1e-12 under a fixed step.
+fn loop_tolerance(method: &ctlgraph_solver::Method) -> f64 {
+    match *method {
+        ctlgraph_solver::Method::DormandPrince { rtol, .. } | ctlgraph_solver::Method::Trbdf2 { rtol, .. } => {
+            (rtol * 1e-3).clamp(1e-14, 1e-8)
+        }
+        _ => 1e-12,
+    }
 }
 
 fn headers(columns: &[Column]) -> Vec<String> {
@@ -383,6 +459,9 @@ impl Model {
     /// the whole signal name, for messages.
     fn block_output(&self, name: &str, base: &str) -> Result<Port, Diagnostic> {
         let model = self;
+        if let Some(port) = self.loop_member_output(name, base)? {
+            return Ok(port);
+        }
         let (block, port) = match model.meta.iter().position(|m| m.name == base) {
             Some(i) => (i, None),
             None => match base.rsplit_once('.') {
@@ -415,6 +494,29 @@ impl Model {
             }
         };
         Ok(model.out_ports[meta.outputs.start + k])
+    }
+
+    /// [`Model::block_output`] of a block inside an algebraic loop's block.
+    fn loop_member_output(&self, name: &str, base: &str) -> Result<Option<Port>, Diagnostic> {
+        let by_name = |n: &str| self.loop_members.iter().find(|m| m.name == n);
+        if let Some(m) = by_name(base) {
+            return match m.outputs[..] {
+                [port] => Ok(Some(port)),
+                _ => Err(Diagnostic::plain(format!("signal `{name}`: block `{base}` has several outputs")).with_hint(
+                    format!(
+                        "name one: {}",
+                        m.output_names.iter().map(|p| format!("{base}.{p}")).collect::<Vec<_>>().join(", ")
+                    ),
+                )),
+            };
+        }
+        let Some((b, p)) = base.rsplit_once('.') else { return Ok(None) };
+        let Some(m) = by_name(b) else { return Ok(None) };
+        match m.output_names.iter().position(|n| n == p) {
+            Some(k) => Ok(Some(m.outputs[k])),
+            None => Err(Diagnostic::plain(format!("signal `{name}`: block `{b}` has no output `{p}`"))
+                .with_hint(format!("its outputs: {}", m.output_names.join(", ")))),
+        }
     }
 
     /// Each block's report of what it decided when built (see

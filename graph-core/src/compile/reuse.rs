@@ -154,6 +154,8 @@ pub fn reuse_structure(base: &Model, g: &FlatGraph, reg: &Registry) -> Result<Op
         external_outputs: base.external_outputs.clone(),
         loop_dead_time: None,
         warnings: Vec::new(),
+        algebraic_loops: base.algebraic_loops.clone(),
+        loop_members: base.loop_members.clone(),
         structure: base.structure.clone(),
     };
     plan_and_advise(&mut model);

@@ -9,9 +9,8 @@ use petgraph::graph::{DiGraph, NodeIndex};
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap, HashSet};
 
-/// Execution order: a topological order of the direct-feedthrough edges,
-/// ties broken by declaration order so listings read like the file.
-pub(super) fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>, Diagnostic> {
+/// The graph of direct-feedthrough edges between real blocks.
+fn feedthrough_graph(nodes: &[Node], drivers: &[Vec<Driver>]) -> (DiGraph<usize, ()>, Vec<NodeIndex>) {
     let mut graph = DiGraph::<usize, ()>::new();
     let ids: Vec<NodeIndex> = (0..nodes.len()).map(|i| graph.add_node(i)).collect();
     // One edge per pair (two wires between the same blocks order them once);
@@ -25,10 +24,86 @@ pub(super) fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>
             }
         }
     }
+    (graph, ids)
+}
+
+/// An algebraic loop: the blocks of a strongly connected component of
+/// feedthrough edges (node indices, ascending), and one cycle through it
+/// from its first block, for messages.
+pub(super) struct FeedthroughLoop {
+    pub members: Vec<usize>,
+    pub cycle: Vec<usize>,
+}
+
+impl FeedthroughLoop {
+    /// `a -> b -> a`.
+    pub fn text(&self, nodes: &[Node]) -> String {
+        let names: Vec<&str> = self.cycle.iter().map(|&i| nodes[i].flat.path.as_str()).collect();
+        format!("{} -> {}", names.join(" -> "), names[0])
+    }
+}
+
+/// Every algebraic loop, in the order of their first blocks. A graph
+/// without one is found so by a topological pass alone; components are
+/// searched (Kosaraju's, iterative: a 100 000-block chain must not
+/// overflow the stack) only where that pass leaves blocks unsorted.
+pub(super) fn feedthrough_loops(nodes: &[Node], drivers: &[Vec<Driver>]) -> Vec<FeedthroughLoop> {
+    let (graph, ids) = feedthrough_graph(nodes, drivers);
+    let mut indegree: Vec<usize> =
+        ids.iter().map(|&n| graph.neighbors_directed(n, petgraph::Direction::Incoming).count()).collect();
+    let mut ready: Vec<usize> = (0..nodes.len()).filter(|&i| indegree[i] == 0).collect();
+    let mut sorted = 0;
+    while let Some(i) = ready.pop() {
+        sorted += 1;
+        for next in graph.neighbors(ids[i]) {
+            let j = graph[next];
+            indegree[j] -= 1;
+            if indegree[j] == 0 {
+                ready.push(j);
+            }
+        }
+    }
+    if sorted == nodes.len() {
+        return Vec::new();
+    }
+    let mut loops = Vec::new();
+    for scc in petgraph::algo::kosaraju_scc(&graph) {
+        let self_loop = scc.len() == 1 && graph.contains_edge(scc[0], scc[0]);
+        if scc.len() > 1 || self_loop {
+            let mut members: Vec<usize> = scc.iter().map(|&n| graph[n]).collect();
+            members.sort_unstable();
+            let cycle = cycle_through(&graph, ids[members[0]], &scc).iter().map(|&n| graph[n]).collect();
+            loops.push(FeedthroughLoop { members, cycle });
+        }
+    }
+    loops.sort_by_key(|l| l.members[0]);
+    loops
+}
+
+/// The refusal of `algebraic_loops: error`: every loop, at the first one's block.
+pub(super) fn loop_error(nodes: &[Node], loops: &[FeedthroughLoop]) -> Diagnostic {
+    let text: Vec<String> = loops.iter().map(|l| l.text(nodes)).collect();
+    let message = format!("algebraic loop: {}", text.join("; "));
+    let hint = "every block on the loop has direct feedthrough; break it with a block that has none \
+                (unit_delay, memory, integrator, a strictly proper transfer_function, an observer), \
+                or let ctlgraph solve it: `simulation: { algebraic_loops: warn }`";
+    let first = loops.first().map(|l| l.members[0]);
+    match first {
+        Some(i) => Diagnostic::at(&nodes[i].flat.spec.pos, message),
+        None => Diagnostic::plain(message),
+    }
+    .with_hint(hint)
+}
+
+/// Execution order: a topological order of the direct-feedthrough edges,
+/// ties broken by declaration order so listings read like the file. The
+/// graph has no algebraic loop left (see [`feedthrough_loops`]).
+pub(super) fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>, Diagnostic> {
+    let (graph, ids) = feedthrough_graph(nodes, drivers);
     let mut indegree: Vec<usize> =
         ids.iter().map(|&n| graph.neighbors_directed(n, petgraph::Direction::Incoming).count()).collect();
     let mut ready: BinaryHeap<Reverse<usize>> =
-        (0..nodes.len()).filter(|&i| indegree[i] == 0 && !nodes[i].is_virtual).map(Reverse).collect();
+        (0..nodes.len()).filter(|&i| indegree[i] == 0 && runs(&nodes[i])).map(Reverse).collect();
     let mut order = Vec::with_capacity(nodes.len());
     while let Some(Reverse(i)) = ready.pop() {
         order.push(i);
@@ -40,32 +115,13 @@ pub(super) fn sort(nodes: &[Node], drivers: &[Vec<Driver>]) -> Result<Vec<usize>
             }
         }
     }
-    let real = nodes.iter().filter(|n| !n.is_virtual).count();
-    if order.len() == real {
-        return Ok(order);
-    }
-    // Every strongly connected component with a cycle is an algebraic loop.
-    let mut loops = Vec::new();
-    for scc in petgraph::algo::tarjan_scc(&graph) {
-        let first = scc.iter().map(|&n| graph[n]).min().unwrap_or(0);
-        let self_loop = scc.len() == 1 && graph.contains_edge(scc[0], scc[0]);
-        if scc.len() > 1 || self_loop {
-            let cycle = cycle_through(&graph, ids[first], &scc);
-            loops.push(cycle.iter().map(|&n| nodes[graph[n]].flat.path.as_str()).collect::<Vec<_>>());
-        }
-    }
-    loops.sort();
-    let first_block = loops.first().and_then(|l| l.first()).copied().unwrap_or("");
-    let pos = nodes.iter().find(|n| n.flat.path == first_block).map(|n| n.flat.spec.pos.clone());
-    let text: Vec<String> = loops.iter().map(|l| format!("{} -> {}", l.join(" -> "), l[0])).collect();
-    let message = format!("algebraic loop: {}", text.join("; "));
-    let hint = "every block on the loop has direct feedthrough; break it with a block that has none \
-                (unit_delay, memory, integrator, a strictly proper transfer_function, an observer)";
-    Err(match pos {
-        Some(p) => Diagnostic::at(&p, message),
-        None => Diagnostic::plain(message),
-    }
-    .with_hint(hint))
+    let real = nodes.iter().filter(|n| runs(n)).count();
+    if order.len() == real { Ok(order) } else { Err(loop_error(nodes, &feedthrough_loops(nodes, drivers))) }
+}
+
+/// Whether a node takes a place in the execution order.
+fn runs(node: &Node) -> bool {
+    !node.is_virtual && !node.absorbed
 }
 
 /// A simple cycle from `start` back to itself inside one component.

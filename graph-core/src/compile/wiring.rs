@@ -31,7 +31,15 @@ pub(super) fn instantiate<'g>(g: &'g FlatGraph, reg: &Registry) -> Result<Vec<No
             // The graph's own input, set by a host program between steps.
             let (iface, block) = ExternalInput::build(&mut params)?;
             params.finish()?;
-            nodes.push(Node { flat: fb, iface, block: Some(Box::new(block)), is_virtual: false, width: None });
+            nodes.push(Node {
+                flat: fb,
+                iface,
+                block: Some(Box::new(block)),
+                is_virtual: false,
+                width: None,
+                label: None,
+                absorbed: false,
+            });
             continue;
         }
         if ty.name == INPORT || ty.name == OUTPORT {
@@ -43,12 +51,28 @@ pub(super) fn instantiate<'g>(g: &'g FlatGraph, reg: &Registry) -> Result<Vec<No
             params.finish()?;
             let iface =
                 Interface::new(SampleTime::Inherited).input("in", Width::Common, true).output("out", Width::Common);
-            nodes.push(Node { flat: fb, iface, block: None, is_virtual: true, width: None });
+            nodes.push(Node {
+                flat: fb,
+                iface,
+                block: None,
+                is_virtual: true,
+                width: None,
+                label: None,
+                absorbed: false,
+            });
             continue;
         }
         let built = (ty.build)(&mut params)?;
         params.finish()?;
-        nodes.push(Node { flat: fb, iface: built.iface, block: Some(built.block), is_virtual: false, width: None });
+        nodes.push(Node {
+            flat: fb,
+            iface: built.iface,
+            block: Some(built.block),
+            is_virtual: false,
+            width: None,
+            label: None,
+            absorbed: false,
+        });
     }
     Ok(nodes)
 }
@@ -311,7 +335,7 @@ pub(super) fn record_columns(
     };
     if g.records.is_empty() {
         for (i, n) in nodes.iter().enumerate() {
-            if n.is_virtual || n.flat.path.contains('/') {
+            if n.is_virtual || n.label.is_some() || n.flat.path.contains('/') {
                 continue;
             }
             for (p, port) in n.iface.outputs.iter().enumerate() {

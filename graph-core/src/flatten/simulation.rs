@@ -26,6 +26,20 @@ pub struct SimConfig {
     pub output: OutputTimes,
     /// `accelerate:` — whether runs use the generated step.
     pub accelerate: Accelerate,
+    /// `algebraic_loops:` — what a loop of feedthrough blocks does.
+    pub algebraic_loops: AlgebraicLoops,
+}
+
+/// `simulation: { algebraic_loops: … }`: a loop of direct-feedthrough
+/// blocks is solved at every evaluation (Newton's method on its cut
+/// signals), silently or with a warning naming it, or refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum AlgebraicLoops {
+    Solve,
+    /// Solve and say so once (the default, as Simulink's).
+    #[default]
+    Warn,
+    Error,
 }
 
 /// `simulation: { accelerate: … }` and `--accelerate`: whether a run uses
@@ -71,7 +85,7 @@ pub enum ZeroCrossing {
 
 /// The keys of `simulation:`, of its `solver:`, and the solver methods
 /// (also what `ctlgraph schema` describes).
-pub const SIM_KEYS: [&str; 5] = ["stop", "solver", "seed", "output", "accelerate"];
+pub const SIM_KEYS: [&str; 6] = ["stop", "solver", "seed", "output", "accelerate", "algebraic_loops"];
 pub const SOLVER_KEYS: [&str; 8] =
     ["method", "step", "rtol", "atol", "max_step", "initial_step", "zero_crossing", "exact_lti"];
 pub const METHODS: [&str; 5] = ["dopri5", "trbdf2", "rk4", "heun", "euler"];
@@ -246,5 +260,31 @@ pub(super) fn sim_config(sim: Option<&Yaml>, scope: &[(String, f64)]) -> Result<
             }
         },
     };
-    Ok(SimConfig { stop, method, seed, zero_crossing, exact_lti, default_max_step, output, accelerate })
+    let algebraic_loops = match yaml::lookup(entries, "algebraic_loops") {
+        None => AlgebraicLoops::Warn,
+        Some(v) => match v.expect_str("`algebraic_loops`")? {
+            "solve" => AlgebraicLoops::Solve,
+            "warn" => AlgebraicLoops::Warn,
+            "error" => AlgebraicLoops::Error,
+            other => {
+                return Err(Diagnostic::at(
+                    &v.pos,
+                    format!("`algebraic_loops: {other}`: expected solve, warn or error"),
+                )
+                .suggest(other, ["solve", "warn", "error"])
+                .or_hint("warn (the default) solves each loop and says so once; error refuses it"));
+            }
+        },
+    };
+    Ok(SimConfig {
+        stop,
+        method,
+        seed,
+        zero_crossing,
+        exact_lti,
+        default_max_step,
+        output,
+        accelerate,
+        algebraic_loops,
+    })
 }
