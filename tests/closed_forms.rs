@@ -222,3 +222,162 @@ fn quantizer_and_friction_closed_forms() {
         .unwrap();
     assert!((jump - 0.5).abs() < 1e-9, "the jump at {jump}");
 }
+
+/// The Signal Generator's waves at every row (a jump's own row may show
+/// either side), and integrated: with every jump a step boundary, dopri5
+/// integrates a square wave to its triangle and a sawtooth to its
+/// parabolas at the rounding level.
+#[test]
+fn signal_generator_waves_and_their_integrals() {
+    let trace = run("simulation: { stop: 2.1, solver: { method: dopri5, rtol: 1e-10, atol: 1e-12 } }\nblocks:\n\
+         \x20 sq: { type: signal_generator, waveform: square, amplitude: 1.5, frequency: 2 }\n\
+         \x20 saw: { type: signal_generator, waveform: sawtooth, amplitude: 2, frequency: 2 }\n\
+         \x20 sine: { type: signal_generator, amplitude: 3, frequency: 0.5 }\n\
+         \x20 isq: { type: integrator }\n  isaw: { type: integrator }\n\
+         wires: [sq -> isq, saw -> isaw]\nrecord: [sq, saw, sine, isq, isaw]\n");
+    let frac = |x: f64| x - x.floor();
+    let near_jump = |t: f64| (4.0 * t - (4.0 * t).round()).abs() < 1e-9;
+    for (i, &t) in trace.t().iter().enumerate() {
+        let sine = 3.0 * (std::f64::consts::PI * t).sin();
+        assert!((trace.column("sine").unwrap()[i] - sine).abs() < 1e-12, "sine at {t}");
+        if near_jump(t) {
+            continue;
+        }
+        let sq = if frac(2.0 * t) < 0.5 { 1.5 } else { -1.5 };
+        assert_eq!(trace.column("sq").unwrap()[i], sq, "square at {t}");
+        let saw = 4.0 * (2.0 * t - (2.0 * t + 0.5).floor());
+        assert!((trace.column("saw").unwrap()[i] - saw).abs() < 1e-12, "sawtooth at {t}");
+    }
+    // ∫ square: a triangle 0 → 0.375 (at 0.25) → 0 (at 0.5), period 0.5.
+    let triangle = |t: f64| {
+        let s = frac(2.0 * t) / 2.0;
+        if s < 0.25 { 1.5 * s } else { 1.5 * (0.5 - s) }
+    };
+    assert!(max_error(&trace, "isq", triangle) < 1e-11, "{}", max_error(&trace, "isq", triangle));
+    // ∫ sawtooth 4·(2t − n) over its tooth: 4t² − 4nt + const, continuous: F(t) = (saw² − 4)/16 + 1/4.
+    let parabola = |t: f64| {
+        let saw = 4.0 * (2.0 * t - (2.0 * t + 0.5).floor());
+        saw * saw / 16.0
+    };
+    assert!(max_error(&trace, "isaw", parabola) < 1e-11, "{}", max_error(&trace, "isaw", parabola));
+}
+
+/// The chirp y = sin(2π(f0·t + (f1 − f0)·t²/(2T))) at every row, and its
+/// phase: 2·(f0·T + (f1 − f0)·T/2) sign changes by the target time.
+#[test]
+fn chirp_follows_its_phase() {
+    let trace = run("simulation: { stop: 4, solver: { method: rk4, step: 1e-4 } }\nblocks:\n\
+         \x20 c: { type: chirp, initial_frequency: 1, target_frequency: 5, target_time: 4, amplitude: 2 }\n\
+         record: [c]\n");
+    let phase = |t: f64| t + 4.0 * t * t / 8.0;
+    let want = |t: f64| 2.0 * (2.0 * std::f64::consts::PI * phase(t)).sin();
+    assert!(max_error(&trace, "c", want) < 1e-11);
+    // Before t = 3.99 (phase 11.95 cycles): the zeros at phase k/2, k = 1..=23.
+    let y = trace.column("c").unwrap();
+    let n = trace.t().iter().take_while(|&&t| t <= 3.99).count();
+    let changes = y[..n].windows(2).filter(|w| w[0] * w[1] < 0.0).count();
+    assert_eq!(changes, 23);
+}
+
+/// A repeating sequence with a jump: rows on the interpolation, and its
+/// integral exact at the rounding level (every corner is a step boundary).
+#[test]
+fn repeating_sequence_interpolates_and_repeats() {
+    let trace = run("simulation: { stop: 7.5, solver: { method: dopri5, rtol: 1e-10, atol: 1e-12 } }\nblocks:\n\
+         \x20 s: { type: repeating_sequence, times: [0, 1, 1, 2, 3], values: [0, 2, -1, -1, 0] }\n\
+         \x20 i: { type: integrator }\nwires: [s -> i]\nrecord: [s, i]\n");
+    let within = |t: f64| t - 3.0 * (t / 3.0).floor();
+    let value = |t: f64| {
+        let tau = within(t);
+        if tau < 1.0 {
+            2.0 * tau
+        } else if tau < 2.0 {
+            -1.0
+        } else {
+            tau - 3.0
+        }
+    };
+    // ∫ over a period: 1 − 1 − 0.5 = −0.5.
+    let integral = |t: f64| {
+        let tau = within(t);
+        let part = if tau < 1.0 {
+            tau * tau
+        } else if tau < 2.0 {
+            1.0 - (tau - 1.0)
+        } else {
+            0.5 * (tau - 3.0).powi(2) - 0.5
+        };
+        -0.5 * (t / 3.0).floor() + part
+    };
+    for (i, &t) in trace.t().iter().enumerate() {
+        if (within(t) - 1.0).abs() < 1e-9 {
+            continue;
+        }
+        assert!((trace.column("s").unwrap()[i] - value(t)).abs() < 1e-12, "s at {t}");
+    }
+    assert!(max_error(&trace, "i", integral) < 1e-11, "{}", max_error(&trace, "i", integral));
+}
+
+/// The play operator on u = 2·sin t with w = 1: engaged upward (y = u − ½)
+/// to the peak 1.5, held until u = 1 (t = 5π/6), engaged downward (y =
+/// u + ½) to −1.5, held until u = −1 (t = 11π/6), and so on. The
+/// engagements are located zero crossings; at a reversal the held value is
+/// the input's extreme among major steps, within ½·|ü|·max_step² of it.
+#[test]
+fn backlash_is_the_play_operator() {
+    let trace = run(
+        "simulation: { stop: 12, solver: { method: dopri5, rtol: 1e-10, atol: 1e-12, max_step: 1e-3 } }\nblocks:\n\
+         \x20 u: { type: sine, amplitude: 2, frequency: 0.15915494309189535 }\n\
+         \x20 b: { type: backlash, width: 1 }\nwires: [u -> b]\nrecord: [u, b]\n",
+    );
+    use std::f64::consts::PI;
+    let play = |t: f64| {
+        let u = 2.0 * t.sin();
+        let phase = t % (2.0 * PI);
+        if t < PI / 2.0 {
+            (u - 0.5).max(0.0)
+        } else if !(PI / 2.0..11.0 * PI / 6.0).contains(&phase) {
+            // Rising from the trough: held at −1.5 until engaged.
+            (u - 0.5).max(-1.5)
+        } else if phase < 5.0 * PI / 6.0 {
+            1.5
+        } else if phase < 3.0 * PI / 2.0 {
+            u + 0.5
+        } else {
+            -1.5
+        }
+    };
+    let err = max_error(&trace, "b", play);
+    assert!(err < 1e-6, "max error {err}");
+    let (u, b) = (trace.column("u").unwrap(), trace.column("b").unwrap());
+    assert!(u.iter().zip(b).all(|(u, b)| (u - b).abs() <= 0.5 + 1e-12), "the output leaves the dead band");
+}
+
+/// A bilinear function is reproduced exactly inside the table, and outside
+/// it by linear extrapolation; `clip` holds each input at its end.
+#[test]
+fn lookup_table_2d_reproduces_a_bilinear_function() {
+    let f = |u1: f64, u2: f64| 1.0 + 2.0 * u1 - 3.0 * u2 + 0.5 * u1 * u2;
+    let (rows, cols) = ([-1.0, 0.0, 0.5, 2.0], [0.0, 1.0, 3.0]);
+    let table: Vec<String> = rows
+        .iter()
+        .map(|&r| format!("[{}]", cols.iter().map(|&c| f(r, c).to_string()).collect::<Vec<_>>().join(", ")))
+        .collect();
+    let yaml = format!(
+        "simulation: {{ stop: 4, solver: {{ method: rk4, step: 0.01 }} }}\nblocks:\n\
+         \x20 a: {{ type: ramp, slope: 1.2, initial: -1.8 }}\n  b: {{ type: sine, amplitude: 2.5, frequency: 0.3, bias: 1 }}\n\
+         \x20 lin: {{ type: lookup_table_2d, breakpoints1: [-1, 0, 0.5, 2], breakpoints2: [0, 1, 3], table: [{}], extrapolation: linear }}\n\
+         \x20 clip: {{ type: lookup_table_2d, breakpoints1: [-1, 0, 0.5, 2], breakpoints2: [0, 1, 3], table: [{}] }}\n\
+         wires:\n  - a -> lin.u1, clip.u1\n  - b -> lin.u2, clip.u2\nrecord: [a, b, lin, clip]\n",
+        table.join(", "),
+        table.join(", ")
+    );
+    let trace = run(&yaml);
+    let (a, b) = (trace.column("a").unwrap(), trace.column("b").unwrap());
+    for (i, &t) in trace.t().iter().enumerate() {
+        let lin = trace.column("lin").unwrap()[i];
+        assert!((lin - f(a[i], b[i])).abs() < 1e-12, "linear at {t}: {lin}");
+        let clip = trace.column("clip").unwrap()[i];
+        assert!((clip - f(a[i].clamp(-1.0, 2.0), b[i].clamp(0.0, 3.0))).abs() < 1e-12, "clip at {t}: {clip}");
+    }
+}

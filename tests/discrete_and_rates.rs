@@ -318,3 +318,56 @@ fn memory_holds_the_previous_major_steps_input() {
     assert!(trace.t().len() > 30, "{} rows", trace.t().len());
     assert!(trace.column("g[1]").unwrap().iter().chain(trace.column("g[2]").unwrap()).all(|&v| v == 0.0));
 }
+
+/// A constant estimated from noisy samples (A = 1, C = 1, Q = 0): the
+/// Kalman filter is the recursive weighted mean, x̂(k) = (x0/P0 +
+/// Σ_{i<=k} y(i)/R)/(1/P0 + (k+1)/R), its innovation y(k) − x̂(k−1).
+#[test]
+fn kalman_filter_of_a_constant_is_the_weighted_mean() {
+    let trace = common::run(
+        "simulation: { stop: 2, solver: { method: rk4, step: 0.1 } }\nblocks:\n\
+         \x20 y: { type: sine, amplitude: 0.7, frequency: 1.3, bias: 2 }\n\
+         \x20 k: { type: kalman_filter, A: 1, C: 1, Q: 0, R: 0.5, P0: 4, x0: 1, sample_time: 0.1 }\n\
+         wires: [y -> k.y]\nrecord: [y, xhat: k.xhat, e: k.innovation]\n",
+    );
+    let (y, xhat, e) = (trace.column("y").unwrap(), trace.column("xhat").unwrap(), trace.column("e").unwrap());
+    let (mut weight, mut sum, mut before) = (1.0 / 4.0, 1.0 / 4.0, 1.0);
+    for k in 0..=20 {
+        weight += 1.0 / 0.5;
+        sum += y[k] / 0.5;
+        let want = sum / weight;
+        assert!((xhat[k] - want).abs() < 1e-14 * want.abs().max(1.0) * 100.0, "x̂ at {k}: {} vs {want}", xhat[k]);
+        assert!((e[k] - (y[k] - before)).abs() < 1e-12, "innovation at {k}");
+        before = want;
+    }
+}
+
+/// The stationary gain against SciPy 1.17.1's `solve_discrete_are` for a
+/// position-velocity plant (values recorded: P = solve_discrete_are(Aᵀ,
+/// Cᵀ, Q, R), K = P Cᵀ (C P Cᵀ + R)⁻¹): from x0 = 0 the first estimate of
+/// a unit measurement is K itself; and the time-varying filter's estimate
+/// on the same noisy measurements converges to the stationary one's.
+#[test]
+fn kalman_steady_state_gain_matches_scipy_and_the_time_varying_filter() {
+    let plant = "A: [[1, 0.1], [0, 0.95]], C: [[1, 0]], Q: [[1e-4, 0], [0, 1e-2]], R: 0.04, sample_time: 0.1";
+    let trace = common::run(&format!(
+        "simulation: {{ stop: 300, seed: 7, solver: {{ method: rk4, step: 0.1 }} }}\nblocks:\n\
+         \x20 one: {{ type: constant, value: 1 }}\n\
+         \x20 n: {{ type: gaussian_noise, variance: 0.04, sample_time: 0.1 }}\n\
+         \x20 ss: {{ type: kalman_filter, {plant}, gain: steady_state }}\n\
+         \x20 tv: {{ type: kalman_filter, {plant}, P0: [[1, 0], [0, 1]] }}\n\
+         \x20 first: {{ type: kalman_filter, {plant}, gain: steady_state }}\n\
+         wires: [n -> ss.y, n -> tv.y, one -> first.y]\nrecord: [first: first.xhat, ss: ss.xhat, tv: tv.xhat]\n"
+    ));
+    let k = [0.24251509343868227, 0.3144541179247563];
+    for (i, want) in k.iter().enumerate() {
+        let got = trace.column(&format!("first[{}]", i + 1)).unwrap()[0];
+        assert!((got - want).abs() < 1e-12, "K[{i}] = {got}, SciPy {want}");
+    }
+    for i in 1..=2 {
+        let (ss, tv) = (trace.column(&format!("ss[{i}]")).unwrap(), trace.column(&format!("tv[{i}]")).unwrap());
+        let gap = (ss[ss.len() - 1] - tv[tv.len() - 1]).abs();
+        assert!(gap < 1e-9, "x̂[{i}]: time-varying and stationary differ by {gap} after 3000 samples");
+        assert!((ss[5] - tv[5]).abs() > 1e-6, "they differ early on, while the gain settles");
+    }
+}

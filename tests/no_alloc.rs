@@ -169,6 +169,29 @@ record: [y: plant]
     assert_eq!(count_allocations(model, 1, 5_000), 0, "fladrc");
 }
 
+/// Algebraic loops: Newton's iterations, the Jacobian's columns and the
+/// line search work in space sized at build — under dopri5 (the diode),
+/// and under TR-BDF2 through a stiff plant with feedthrough; and the
+/// Kalman filter's covariance recursion.
+#[test]
+fn algebraic_loops_and_the_kalman_filter_allocate_nothing() {
+    // The diode's 40 ms made a second, to pass the harness's 0.1 s.
+    let diode =
+        std::fs::read_to_string("graphs/tutorial/algebraic_loop.yaml").unwrap().replace("stop: 0.04", "stop: 1");
+    let model = ctlgraph::compile_str(&diode, "algebraic_loop.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(model.algebraic_loops.len(), 1);
+    assert_eq!(count_allocations(model, 1, 5_000), 0, "the diode");
+    let model =
+        ctlgraph::compile_file("graphs/estimation/kalman_cart.yaml".as_ref(), &[]).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(count_allocations(model, 1, 900), 0, "kalman_cart");
+    let stiff = "simulation: { stop: 100, solver: { method: trbdf2, max_step: 1.0e-3 } }\nblocks:\n  r: { type: pulse, period: 0.5 }\n\
+                 \x20 e: { type: sum, signs: \"+-\" }\n  k: { type: fcn, expr: \"5*u + 0.1*u^3\" }\n\
+                 \x20 plant: { type: state_space, A: [[0, 1], [-10000, -10001]], B: [[0], [1]], C: [[10000, 0]], D: 0.5 }\n\
+                 wires: [r -> e.u1, e -> k, k -> plant, plant -> e.u2]\nrecord: [y: plant]\n";
+    let model = ctlgraph::compile_str(stiff, "stiff_loop.yaml", &[]).unwrap_or_else(|d| panic!("{d}"));
+    assert_eq!(count_allocations(model, 200, 2_000), 0, "a nonlinear loop through a stiff plant");
+}
+
 #[test]
 fn events_modes_and_delays_allocate_nothing_once_warm() {
     for (solver, warm_up) in

@@ -214,3 +214,53 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+
+    /// The play operator never lets the output leave the dead band, and
+    /// moves it only the way the input moves.
+    #[test]
+    fn backlash_stays_in_its_band_and_moves_with_the_input(u in testing::signal(4.0), width in 0.0..2.0f64, initial in -1.0..1.0f64) {
+        let trace = run("backlash", &format!("width: {width:e}, initial: {initial:e}"), &[&u], 3.0);
+        let y = trace.column("y").unwrap();
+        let t = trace.t();
+        for i in 1..t.len() {
+            let uu = u.eval(t[i]);
+            prop_assert!((y[i] - uu).abs() <= width / 2.0 + 1e-9, "t = {}: y {} u {uu}", t[i], y[i]);
+            let (dy, du) = (y[i] - y[i - 1], uu - u.eval(t[i - 1]));
+            prop_assert!(dy == 0.0 || dy * du > 0.0, "t = {}: the output moved against the input", t[i]);
+        }
+    }
+
+    /// A limited discrete integrator stays within its limits; a moving
+    /// average within its input's range.
+    #[test]
+    fn discrete_integrator_and_moving_average_stay_bounded(u in testing::signal(5.0), (lo, hi) in testing::limits(2.0), window in 1usize..8) {
+        let params = format!("method: trapezoidal, gain: 3, initial: {:e}, lower: {lo:e}, upper: {hi:e}, sample_time: 0.01", (lo + hi) / 2.0);
+        let trace = run("discrete_integrator", &params, &[&u], 2.0);
+        prop_assert!(trace.column("y").unwrap().iter().all(|y| *y >= lo && *y <= hi));
+        let trace = run("moving_average", &format!("window: {window}, sample_time: 0.01"), &[&u], 2.0);
+        let bound = u.bound().max(0.0);
+        prop_assert!(trace.column("y").unwrap().iter().all(|y| y.abs() <= bound + 1e-12));
+    }
+
+    /// Whatever the noise levels and the plant's pole, the time-varying
+    /// Kalman filter's estimate converges to the stationary filter's (its
+    /// gain to the Riccati equation's solution), on the same measurements.
+    #[test]
+    fn kalman_time_varying_converges_to_the_stationary_filter(q in 1e-3..1.0f64, r in 1e-2..1.0f64, pole in -0.9..0.99f64, freq in 0.1..3.0f64) {
+        let plant = format!("A: [[1, 0.1], [0, {pole:e}]], C: [[1, 0]], Q: [[{:e}, 0], [0, {q:e}]], R: {r:e}, sample_time: 0.1", q / 10.0);
+        let yaml = format!(
+            "simulation: {{ stop: 100, solver: {{ method: rk4, step: 0.1 }} }}\nblocks:\n  y: {{ type: sine, frequency: {freq:e}, amplitude: 2 }}\n\
+             \x20 ss: {{ type: kalman_filter, {plant}, gain: steady_state }}\n  tv: {{ type: kalman_filter, {plant}, P0: [[10, 0], [0, 10]] }}\n\
+             wires: [y -> ss.y, y -> tv.y]\nrecord: [ss: ss.xhat, tv: tv.xhat]\n"
+        );
+        let trace = common::run(&yaml);
+        for i in 1..=2 {
+            let (ss, tv) = (trace.column(&format!("ss[{i}]")).unwrap(), trace.column(&format!("tv[{i}]")).unwrap());
+            let n = ss.len() - 1;
+            prop_assert!((ss[n] - tv[n]).abs() < 1e-6 * (1.0 + ss[n].abs()), "x̂[{}]: {} vs {}", i, ss[n], tv[n]);
+        }
+    }
+}

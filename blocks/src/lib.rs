@@ -20,6 +20,7 @@ macro_rules! rust_type {
 }
 
 pub mod adrc;
+pub mod backlash;
 #[cfg(test)]
 mod block_tests;
 #[cfg(all(test, feature = "implicit"))]
@@ -34,6 +35,7 @@ pub mod fmu;
 pub mod force;
 pub mod fuzzy;
 pub mod integrator;
+pub mod kalman;
 pub mod logic;
 pub mod math;
 pub mod milling;
@@ -42,6 +44,7 @@ pub mod noise;
 pub mod nonlinear;
 pub mod pid;
 pub mod routing;
+pub mod signals;
 pub mod smc;
 pub mod sources;
 pub mod tables;
@@ -56,6 +59,7 @@ pub mod testing;
 /// Rust form (`c_forms` in the root crate's tests).
 pub const TYPES_WITH_C_FORM: &[&str] = &[
     "abs",
+    "backlash",
     "constant",
     "coulomb_viscous_friction",
     "dead_zone",
@@ -104,10 +108,12 @@ pub fn registry() -> Registry {
     let mut reg = Registry::new();
     for family in [
         sources::TYPES,
+        signals::TYPES,
         tables::TYPES,
         noise::TYPES,
         math::TYPES,
         nonlinear::TYPES,
+        backlash::TYPES,
         continuous::TYPES,
         integrator::TYPES,
         delay::TYPES,
@@ -123,6 +129,7 @@ pub fn registry() -> Registry {
         motion::TYPES,
         smc::TYPES,
         estimation::TYPES,
+        kalman::TYPES,
         fmu::TYPES,
         routing::TYPES,
     ] {

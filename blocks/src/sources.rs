@@ -142,7 +142,7 @@ impl<F: Fn(&Io) -> f64 + Send + Sync + Clone + 'static> Block for TimeFn<F> {
 }
 
 /// A source y = f(t). `piecewise` declares that f changes only at `events`.
-fn scalar_source<F: Fn(&Io) -> f64 + Send + Sync + Clone + 'static>(
+pub(crate) fn scalar_source<F: Fn(&Io) -> f64 + Send + Sync + Clone + 'static>(
     p: &mut Params,
     events: Vec<f64>,
     piecewise: bool,

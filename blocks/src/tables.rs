@@ -3,7 +3,7 @@
 
 use crate::{SAMPLE_TIME_CONTINUOUS, SAMPLE_TIME_INHERITED, U_ANY, Y_SAME, Y_SCALAR, table::*};
 use ctlgraph_core::codegen::c::{CBlock, NoCForm};
-use ctlgraph_core::registry::{BlockType, Built, ParamDoc};
+use ctlgraph_core::registry::{BlockType, Built, ParamDoc, PortDoc};
 use ctlgraph_core::{Block, Diagnostic, Interface, Io, Params, Width};
 
 pub const TYPES: &[BlockType] = &[
@@ -42,6 +42,35 @@ pub const TYPES: &[BlockType] = &[
             crate::ACTIVE,
         ],
         build: build_from_csv,
+    },
+    BlockType {
+        name: "lookup_table_2d",
+        category: "math",
+        summary: "Bilinear interpolation y = f(u1, u2) in a table over two sets of breakpoints.",
+        doc: "With row breakpoints r (for u1), column breakpoints c (for u2), both strictly \
+              increasing, and table[i][j] the value at (r[i], c[j]) — Simulink's 2-D Lookup Table with \
+              linear interpolation: in the cell r[i] <= u1 <= r[i+1], c[j] <= u2 <= c[j+1], with \
+              a = (u1 − r[i])/(r[i+1] − r[i]) and b = (u2 − c[j])/(c[j+1] − c[j]),\n\
+              \x20 y = (1−a)·[(1−b)·T[i][j] + b·T[i][j+1]] + a·[(1−b)·T[i+1][j] + b·T[i+1][j+1]]\n\
+              Outside the breakpoints `clip` (Simulink's name; `clamp` as lookup_table_1d says is the \
+              same) holds each input at its end breakpoint, `linear` extends the edge cells. \
+              Elementwise over u1 and u2 (a scalar is paired with every element of the other).",
+        inputs: &[
+            PortDoc { name: "u1", doc: "the row coordinate; any width" },
+            PortDoc { name: "u2", doc: "the column coordinate; same width as u1, or scalar" },
+        ],
+        outputs: &[PortDoc { name: "y", doc: "same width as the inputs" }],
+        params: &[
+            param("breakpoints1", Required, "r: breakpoints of u1, strictly increasing, at least two")
+                .kind(ParamKind::Numbers),
+            param("breakpoints2", Required, "c: breakpoints of u2, strictly increasing, at least two")
+                .kind(ParamKind::Numbers),
+            param("table", Required, "one row per breakpoint of u1, one column per breakpoint of u2")
+                .kind(ParamKind::Matrix),
+            param("extrapolation", Word("clip"), "clip | clamp | linear").options(&["clip", "clamp", "linear"]),
+            SAMPLE_TIME_INHERITED,
+        ],
+        build: build_lookup_2d,
     },
 ];
 
@@ -284,4 +313,84 @@ mod tests {
         assert_eq!([t.eval(0.999), t.eval(1.0), t.eval(1.5)], [0.0, 5.0, 5.0]);
         assert!(Table::new(vec![1.0, 0.0], vec![0.0, 0.0], Outside::Clamp).is_err());
     }
+}
+
+/// A 2-D table with bilinear interpolation.
+#[derive(Clone, Debug)]
+pub struct Lookup2d {
+    rows: Vec<f64>,
+    cols: Vec<f64>,
+    /// Row-major, rows.len() × cols.len().
+    table: Vec<f64>,
+    linear: bool,
+}
+
+/// The cell of `x` holding `u` (limited to the first and last) and the
+/// fraction along it: clipped to [0, 1] unless `linear`.
+fn cell(x: &[f64], u: f64, linear: bool) -> (usize, f64) {
+    let n = x.len();
+    let i = x.partition_point(|&v| v <= u).clamp(1, n - 1) - 1;
+    let a = (u - x[i]) / (x[i + 1] - x[i]);
+    (i, if linear || a.is_nan() { a } else { a.clamp(0.0, 1.0) })
+}
+
+impl Lookup2d {
+    pub fn eval(&self, u1: f64, u2: f64) -> f64 {
+        let (i, a) = cell(&self.rows, u1, self.linear);
+        let (j, b) = cell(&self.cols, u2, self.linear);
+        let m = self.cols.len();
+        let t = |r: usize, c: usize| self.table[r * m + c];
+        let near = t(i, j) + (t(i, j + 1) - t(i, j)) * b;
+        let far = t(i + 1, j) + (t(i + 1, j + 1) - t(i + 1, j)) * b;
+        near + (far - near) * a
+    }
+}
+
+impl Block for Lookup2d {
+    rust_type!(Lookup2d);
+    fn updates(&self) -> bool {
+        false
+    }
+    fn output(&mut self, io: &mut Io) {
+        for k in 0..io.output_width(0) {
+            let v = self.eval(io.u_at(0, k), io.u_at(1, k));
+            io.set_at(0, k, v);
+        }
+    }
+}
+
+fn build_lookup_2d(p: &mut Params) -> Result<Built, Diagnostic> {
+    let mut axes = Vec::new();
+    for key in ["breakpoints1", "breakpoints2"] {
+        let x = p.vector(key)?;
+        if x.len() < 2 {
+            return Err(p.error(key, format!("needs at least two breakpoints, got {}", x.len())));
+        }
+        if let Some(v) = x.iter().find(|v| !v.is_finite()) {
+            return Err(p.error(key, format!("{v} among the breakpoints: each must be a finite number")));
+        }
+        if let Some(i) = x.windows(2).position(|w| w[1] <= w[0]) {
+            return Err(p.error(key, format!("breakpoints must be strictly increasing: {} then {}", x[i], x[i + 1])));
+        }
+        axes.push(x);
+    }
+    let cols = axes.pop().unwrap_or_default();
+    let rows = axes.pop().unwrap_or_default();
+    let table = p.matrix("table")?;
+    if table.len() != rows.len() || table.iter().any(|r| r.len() != cols.len()) {
+        let shape = format!("{}×{}", table.len(), table.first().map_or(0, Vec::len));
+        let message = format!("expected {}×{} (breakpoints1 × breakpoints2), got {shape}", rows.len(), cols.len());
+        return Err(p.error("table", message));
+    }
+    let table: Vec<f64> = table.into_iter().flatten().collect();
+    if let Some(v) = table.iter().find(|v| !v.is_finite()) {
+        return Err(p.error("table", format!("{v} in the table: every value must be a finite number")));
+    }
+    let linear = p.choice("extrapolation", &["clip", "clamp", "linear"])? == "linear";
+    let iface = Interface::new(p.sample_time()?)
+        .piecewise_constant()
+        .input("u1", Width::Common, true)
+        .input("u2", Width::Common, true)
+        .output("y", Width::Common);
+    Ok(Built::new(Lookup2d { rows, cols, table, linear }, iface))
 }

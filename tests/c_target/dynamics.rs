@@ -107,6 +107,14 @@ proptest! {
         let block = format!("type: coulomb_viscous_friction, offset: {q:e}, gain: 1.5, sample_time: {H}");
         bit_for_bit_on(&graph(&[2], &block, &[""], &[""], 100), &hitting(rows(seed, 100, 2, 1.0), &[0.0, -0.0], seed))?;
     }
+
+    /// Backlash of several widths on a vector, the input walking back and
+    /// forth through the dead band.
+    #[test]
+    fn backlash_holds_and_follows(width in 0.0..1.5f64, initial in -0.5..0.5f64, seed in any::<u64>()) {
+        let block = format!("type: backlash, width: {width:e}, initial: {initial:e}, sample_time: {H}");
+        bit_for_bit(&graph(&[2], &block, &[""], &[""], 150), 2, seed, 150, 1.0)?;
+    }
 }
 
 proptest! {
