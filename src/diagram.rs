@@ -61,8 +61,8 @@ const SHOWN_PARAMS: usize = 3;
 /// The diagram of `flat` (as loaded) compiled as `model`: subsystems
 /// collapsed to one box each unless `expand`.
 pub fn build(flat: &FlatGraph, model: &Model, expand: bool) -> Diagram {
-    // A block inside an algebraic loop's block is drawn as itself.
-    let members = model.loop_members.iter().map(|m| (m.name.as_str(), (&m.input_names[..], &m.output_names[..])));
+    // A block inside another (a loop's, a conditional subsystem's) is drawn as itself.
+    let members = model.inner_blocks.iter().map(|m| (m.name.as_str(), (&m.input_names[..], &m.output_names[..])));
     let ports: HashMap<&str, (&[String], &[String])> = model
         .meta
         .iter()

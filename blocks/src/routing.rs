@@ -78,12 +78,31 @@ pub const TYPES: &[BlockType] = &[
         doc: "Loads `file` (relative to this file) and inlines its blocks as `name/inner` at compile \
               time: no run-time cost. Its `inport` blocks are this block's inputs and its `outport` \
               blocks its outputs, named after them (`ctrl.r`, `ctrl.u`). `parameters` overrides the \
-              subsystem's own parameters; values are expressions over this file's parameters.",
+              subsystem's own parameters; values are expressions over this file's parameters.\n\
+              With `enable:` it is an enabled subsystem (Simulink's): an input `enable` is added, and its \
+              blocks run while it is > 0 (the switches located as zero crossings); while disabled their \
+              states are held (derivatives 0) and their outputs hold (`outputs: held`) or read 0 \
+              (`reset`); enabled again, the states resume (`states: held`) or restart from their initial \
+              values (`reset`). With `trigger:` it is a triggered subsystem: an input `trigger` is added, \
+              and its blocks run once per edge of it (rising: from negative to zero or positive, or from \
+              zero to positive; falling the mirror image; located as zero crossings of a continuous \
+              input), their outputs holding between edges and their memory advancing once per edge (their \
+              own sample times give way); no continuous states. Both: an edge runs it only while \
+              enabled. An inport wired straight to an outport holds too (a sample-and-hold).",
         inputs: &[PortDoc { name: "(inports)", doc: "one per inport block of the file" }],
         outputs: &[PortDoc { name: "(outports)", doc: "one per outport block of the file" }],
         params: &[
             param("file", Required, "graph file, relative to this one"),
             param("parameters", Described("{}"), "overrides of the subsystem's parameters").kind(ParamKind::Structure),
+            param(
+                "enable",
+                Described("always runs"),
+                "{ states: held | reset, outputs: held | reset } (or true: both held): runs while its input `enable` is > 0",
+            )
+            .kind(ParamKind::Structure),
+            param("trigger", Described("always runs"), "rising | falling | either: runs once per edge of its input `trigger`")
+                .kind(ParamKind::Word)
+                .options(&["rising", "falling", "either"]),
         ],
         build: structural,
     },

@@ -10,9 +10,11 @@ use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+mod condition;
 mod includes;
 mod output;
 mod simulation;
+pub use condition::{Condition, ENABLE_PORT, Edge, Enable, TRIGGER_PORT};
 use includes::{IncludeError, Includes};
 pub use output::{MAX_REFINE, OutputTimes};
 use simulation::sim_config;
@@ -62,6 +64,8 @@ pub struct FlatGraph {
     pub analysis: Option<crate::spec::Selection>,
     /// Subsystem path → its (inports, outports), for resolving records.
     pub subsystems: HashMap<String, (Vec<String>, Vec<String>)>,
+    /// The conditionally executed subsystems, outermost first.
+    pub conditions: Vec<Condition>,
 }
 
 enum Override {
@@ -135,6 +139,7 @@ fn flatten(graph: &GraphFile, file: Arc<str>, overrides: &[(String, String)]) ->
         scopes: Vec::new(),
         analysis: graph.analysis.clone(),
         subsystems: HashMap::new(),
+        conditions: Vec::new(),
     };
     let number = |v: &Yaml, key: &str| -> Result<f64, Diagnostic> {
         match &v.kind {
@@ -248,7 +253,32 @@ fn expand(
             out.blocks.push(FlatBlock { path, spec: b.clone(), scope: scope.clone(), dir: dir.clone() });
             continue;
         }
-        let inner = load_subsystem(b, &path, &scope, &dir, out, includes)?;
+        let condition = condition::read(b, &path)?;
+        let at = out.conditions.len();
+        let mut inner = load_subsystem(b, &path, &scope, &dir, out, includes)?;
+        if let Some(c) = condition {
+            // Its `enable` and `trigger` ports: inports of its own.
+            let ports = [(c.enable.is_some(), ENABLE_PORT), (c.trigger.is_some(), TRIGGER_PORT)];
+            for name in ports.iter().filter(|p| p.0).map(|p| p.1) {
+                if inner.0.iter().any(|p| p == name) {
+                    let message = format!("block `{path}` (subsystem): its file has an inport `{name}` already");
+                    return Err(Diagnostic::at(&b.pos, message)
+                        .with_hint(format!("`{name}:` adds that port: rename the inport")));
+                }
+                let spec = Arc::new(condition::port_block(b, name));
+                out.blocks.push(FlatBlock {
+                    path: format!("{path}/{name}"),
+                    spec,
+                    scope: scope.clone(),
+                    dir: dir.clone(),
+                });
+                inner.0.push(name.to_string());
+            }
+            let template = FlatBlock { path: String::new(), spec: b.clone(), scope: scope.clone(), dir: dir.clone() };
+            condition::hold_pass_throughs(out, &path, &inner, &template);
+            // Outer before inner: the inner ones were pushed while loading.
+            out.conditions.insert(at, c);
+        }
         subs.insert(&b.name, inner.clone());
         out.subsystems.insert(path, inner);
     }
@@ -290,7 +320,7 @@ pub fn resolve_sub_port<'a>(ep: &Endpoint, ports: &'a [String], side: &str) -> R
     }
 }
 
-const SUBSYSTEM_KEYS: [&str; 3] = ["type", "file", "parameters"];
+const SUBSYSTEM_KEYS: [&str; 5] = ["type", "file", "parameters", "enable", "trigger"];
 
 fn load_subsystem(
     b: &BlockSpec,

@@ -11,6 +11,8 @@ pub mod block;
 pub mod checks;
 pub mod codegen;
 pub mod compile;
+pub mod composite;
+pub mod conditional;
 pub mod dense;
 pub mod diag;
 pub mod expr;

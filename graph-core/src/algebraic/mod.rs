@@ -9,47 +9,9 @@
 mod newton;
 
 use crate::block::{Block, Breakpoint, Crossing, Io, Port};
+use crate::composite::{Call, Member};
 use newton::Newton;
-use std::ops::Range;
 use std::sync::Mutex;
-
-/// A block of the loop, with its ports on the loop's buffer and its share
-/// of the loop's states and zero-crossing functions.
-#[derive(Clone)]
-pub struct Member {
-    name: String,
-    block: Box<dyn Block>,
-    ins: Vec<Port>,
-    outs: Vec<Port>,
-    states: Range<usize>,
-    crossings: Range<usize>,
-}
-
-impl Member {
-    pub fn new(name: String, block: Box<dyn Block>, ins: Vec<Port>, outs: Vec<Port>) -> Member {
-        Member { name, block, ins, outs, states: 0..0, crossings: 0..0 }
-    }
-}
-
-/// How the loop block was called, for its members' calls.
-#[derive(Clone, Copy)]
-struct Call {
-    t: f64,
-    left_limit: bool,
-    major: bool,
-    frozen: bool,
-}
-
-impl Call {
-    fn of(io: &Io) -> Call {
-        Call { t: io.t, left_limit: io.is_left_limit(), major: io.is_major(), frozen: !io.may_switch() }
-    }
-
-    fn io<'a>(self, (ins, outs): (&'a [Port], &'a [Port]), x: &'a [f64], buffer: &'a mut [f64]) -> Io<'a> {
-        let io = Io::new(self.t, self.left_limit, x, buffer, ins, outs);
-        if self.major { io } else { io.in_minor_step(self.frozen) }
-    }
-}
 
 /// An algebraic loop as one block.
 pub struct AlgebraicLoop {
@@ -106,13 +68,7 @@ impl AlgebraicLoop {
         buffer_len: usize,
         tolerance: f64,
     ) -> AlgebraicLoop {
-        let (mut n_states, mut n_crossings) = (0, 0);
-        for m in &mut members {
-            let (s, c) = (m.block.num_states(), m.block.num_zero_crossings());
-            m.states = n_states..n_states + s;
-            m.crossings = n_crossings..n_crossings + c;
-            (n_states, n_crossings) = (n_states + s, n_crossings + c);
-        }
+        let (n_states, n_crossings) = crate::composite::share(&mut members);
         AlgebraicLoop {
             name,
             members,

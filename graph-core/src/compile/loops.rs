@@ -7,9 +7,9 @@
 //! before).
 
 use super::schedule::FeedthroughLoop;
-use super::{Driver, Node, resolved};
-use crate::algebraic::{AlgebraicLoop, Member};
-use crate::block::{Interface, Port, SampleTime, Width};
+use super::{Driver, Node, absorb, resolved};
+use crate::algebraic::AlgebraicLoop;
+use crate::block::SampleTime;
 use crate::diag::Diagnostic;
 use std::collections::HashMap;
 
@@ -17,13 +17,10 @@ use std::collections::HashMap;
 /// beyond it, greedily.
 const EXHAUSTIVE_CUT: usize = 16;
 
-/// A loop collapsed into node `node`: where each member's outputs went
-/// (member, its port → the loop block's port), and how `check` names it.
+/// A loop collapsed into one block, and how `check` names it.
 pub(super) struct Collapsed {
-    pub node: usize,
-    pub outputs: Vec<((usize, usize), usize)>,
+    pub installed: absorb::Installed,
     pub description: String,
-    pub members: Vec<usize>,
 }
 
 /// Moves the loop's blocks into a new node (pushed onto `nodes`, its
@@ -53,112 +50,67 @@ pub(super) fn collapse(
             }
         }
     }
-    let widths = |nodes: &[Node], m: usize| -> Vec<usize> {
-        nodes[m].iface.outputs.iter().map(|p| resolved(p.width, nodes[m].width)).collect()
+    let width = |k: usize| -> usize {
+        let m = members[k];
+        nodes[m].iface.outputs.iter().map(|p| resolved(p.width, nodes[m].width)).sum()
     };
-    let cut = cut_set(members.len(), &edges, |k| widths(nodes, members[k]).iter().sum());
+    let cut = cut_set(members.len(), &edges, width);
     let order = evaluation_order(members.len(), &edges, &cut);
-
-    // The loop block's inputs: each member input driven from outside.
-    let mut iface = Interface::new(sample_time);
-    let mut outer_drivers = Vec::new();
-    let mut buffer_len = 0;
-    let mut place = |width: usize| {
-        buffer_len += width;
-        Port { offset: buffer_len - width, width }
-    };
-    let mut external = Vec::new();
-    let mut input_place: HashMap<(usize, usize), Port> = HashMap::new();
-    for &m in members {
-        for (p, d) in drivers[m].iter().enumerate() {
-            if is_member.contains_key(&d.src) {
-                continue;
-            }
-            let port = &nodes[m].iface.inputs[p];
-            let width = resolved(port.width, nodes[m].width);
-            let name = format!("{}.{}", nodes[m].flat.path, port.name);
-            iface = iface.input(&name, Width::Fixed(width), port.feedthrough);
-            outer_drivers.push(d.clone());
-            let slot = place(width);
-            external.push(slot);
-            input_place.insert((m, p), slot);
-        }
-    }
-    // Its outputs: every member's, in member order.
-    let mut output_place: HashMap<(usize, usize), Port> = HashMap::new();
-    let mut outputs = Vec::new();
-    let mut loop_outputs = Vec::new();
-    for &m in members {
-        for (q, w) in widths(nodes, m).into_iter().enumerate() {
-            let name = format!("{}.{}", nodes[m].flat.path, nodes[m].iface.outputs[q].name);
-            iface = iface.output(&name, Width::Fixed(w));
-            let slot = place(w);
-            output_place.insert((m, q), slot);
-            outputs.push(((m, q), loop_outputs.len()));
-            loop_outputs.push(slot);
-        }
-    }
-    // The members, in evaluation order, their ports in the loop's buffer.
+    let layout = absorb::lay_out(nodes, drivers, members, sample_time);
+    // The members in evaluation order; the cut ones' outputs are the unknowns.
     let mut built = Vec::with_capacity(members.len());
     let mut unknowns = Vec::new();
+    let mut cut_names = Vec::new();
     for &k in &order {
         let m = members[k];
-        let ins = drivers[m]
-            .iter()
-            .enumerate()
-            .map(|(p, d)| input_place.get(&(m, p)).copied().unwrap_or_else(|| output_place[&(d.src, d.port)]))
-            .collect();
-        let outs: Vec<Port> = (0..nodes[m].iface.outputs.len()).map(|q| output_place[&(m, q)]).collect();
         if cut.contains(&k) {
-            unknowns.extend(outs.iter().copied());
+            unknowns.extend_from_slice(layout.outputs_of(m));
+            let ports = &nodes[m].iface.outputs;
+            let path = &nodes[m].flat.path;
+            cut_names.extend(
+                ports.iter().map(|p| if ports.len() > 1 { format!("{path}.{}", p.name) } else { path.clone() }),
+            );
         }
-        let block = nodes[m].block.take().ok_or_else(|| Diagnostic::plain("internal: block built twice"))?;
-        built.push(Member::new(nodes[m].flat.path.clone(), block, ins, outs));
+        built.push(layout.member(nodes, m)?);
     }
-    let cut_names: Vec<String> = order
-        .iter()
-        .filter(|k| cut.contains(k))
-        .flat_map(|&k| {
-            let m = members[k];
-            let many = nodes[m].iface.outputs.len() > 1;
-            nodes[m].iface.outputs.iter().map(move |p| (m, many, p.name.clone()))
-        })
-        .map(|(m, many, port)| if many { format!("{}.{port}", nodes[m].flat.path) } else { nodes[m].flat.path.clone() })
-        .collect();
     let n_unknowns: usize = unknowns.iter().map(|p| p.width).sum();
     let description = format!(
         "algebraic loop {text}: solved for {} at every evaluation ({n_unknowns} unknown{})",
         cut_names.join(", "),
         if n_unknowns == 1 { "" } else { "s" }
     );
-    let solver = AlgebraicLoop::new(text, built, cut.len(), external, loop_outputs, unknowns, buffer_len, tolerance);
+    let solver = AlgebraicLoop::new(
+        text.clone(),
+        built,
+        cut.len(),
+        layout.external.clone(),
+        layout.outputs.clone(),
+        unknowns,
+        layout.buffer_len,
+        tolerance,
+    );
+    let installed = absorb::install(
+        nodes,
+        drivers,
+        members,
+        layout,
+        Box::new(solver),
+        format!("algebraic loop {text}"),
+        "algebraic_loop",
+    );
+    Ok(Collapsed { installed, description })
+}
 
-    // Wires from the members now leave the loop block.
-    let node = nodes.len();
-    let port_of: HashMap<(usize, usize), usize> = outputs.iter().copied().collect();
-    for ds in drivers.iter_mut() {
-        for d in ds.iter_mut().filter(|d| is_member.contains_key(&d.src)) {
-            d.port = port_of[&(d.src, d.port)];
-            d.src = node;
+/// How closely an algebraic loop's equations are solved: a thousandth of
+/// an adaptive method's relative tolerance (its error control then sees
+/// the loop's signals as exact), 1e-12 under a fixed step.
+pub(super) fn tolerance(method: &ctlgraph_solver::Method) -> f64 {
+    match *method {
+        ctlgraph_solver::Method::DormandPrince { rtol, .. } | ctlgraph_solver::Method::Trbdf2 { rtol, .. } => {
+            (rtol * 1e-3).clamp(1e-14, 1e-8)
         }
+        _ => 1e-12,
     }
-    for &m in members {
-        drivers[m].clear();
-        nodes[m].absorbed = true;
-    }
-    let first = nodes[members[0]].flat;
-    let label = Some(format!("algebraic loop {}", found.text(nodes)));
-    nodes.push(Node {
-        flat: first,
-        iface,
-        block: Some(Box::new(solver)),
-        is_virtual: false,
-        width: None,
-        label,
-        absorbed: false,
-    });
-    drivers.push(outer_drivers);
-    Ok(Collapsed { node, outputs, description, members: members.clone() })
 }
 
 /// The one rate of the loop's blocks: a loop through different sample
@@ -238,7 +190,7 @@ fn acyclic_without(n: usize, edges: &[(usize, usize)], cut: &[usize]) -> bool {
 
 /// The members not cut, in an order where each follows those it reads
 /// (ties by position); a cycle's members are missing.
-fn topological(n: usize, edges: &[(usize, usize)], cut: &[usize]) -> Vec<usize> {
+pub(super) fn topological(n: usize, edges: &[(usize, usize)], cut: &[usize]) -> Vec<usize> {
     let kept: Vec<&(usize, usize)> = edges.iter().filter(|(a, b)| !cut.contains(a) && !cut.contains(b)).collect();
     let mut indegree = vec![0; n];
     kept.iter().for_each(|&&(_, b)| indegree[b] += 1);

@@ -3,8 +3,10 @@
 //! widths and rates, sort by direct-feedthrough edges and lay out one flat
 //! signal buffer with every input resolved to an index.
 
+mod absorb;
 mod advice;
 mod between;
+mod conditional;
 mod external;
 mod loops;
 mod reuse;
@@ -53,14 +55,15 @@ pub struct BlockMeta {
     pub piecewise_constant: bool,
 }
 
-/// A block running inside an algebraic loop's block: its names, and where
-/// its outputs are in the signal buffer.
+/// A block running inside another (an algebraic loop's, a conditionally
+/// executed subsystem's): its names, and where its outputs are in the
+/// signal buffer.
 #[derive(Clone, Debug)]
-pub struct LoopMember {
+pub struct InnerBlock {
     pub name: String,
     pub type_name: String,
-    /// The loop's block, an index into [`Model::meta`].
-    pub loop_block: usize,
+    /// The block it runs in, an index into [`Model::meta`].
+    pub container: usize,
     pub input_names: Vec<String>,
     pub output_names: Vec<String>,
     pub outputs: Vec<Port>,
@@ -144,9 +147,10 @@ pub struct Model {
     /// Each algebraic loop solved at every evaluation, as `check` lists
     /// it: its blocks and the signals it is solved for.
     pub algebraic_loops: Vec<String>,
-    /// The blocks that run inside an algebraic loop's block, which
-    /// [`Model::meta`] lists in their place.
-    pub loop_members: Vec<LoopMember>,
+    /// The blocks that run inside another block (an algebraic loop's, a
+    /// conditionally executed subsystem's), which [`Model::meta`] lists in
+    /// their place.
+    pub inner_blocks: Vec<InnerBlock>,
     /// What another loaded graph must share to be compiled on this one's
     /// structure ([`recompile`]).
     pub(crate) structure: reuse::Structure,
@@ -158,9 +162,9 @@ struct Node<'g> {
     block: Option<Box<dyn Block>>,
     is_virtual: bool,
     width: Option<usize>,
-    /// An algebraic loop's block ([`loops`]): its name (`flat` is its first
-    /// member's, for positions).
-    label: Option<String>,
+    /// A block holding others ([`absorb`]): its name and type (`flat` is
+    /// its first member's, for positions).
+    label: Option<(String, &'static str)>,
     /// A member of an algebraic loop: it runs inside the loop's block.
     absorbed: bool,
 }
@@ -181,13 +185,28 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
     let direct = connect(g, &nodes, &index)?;
     let mut drivers = resolve_drivers(&nodes, &direct)?;
     resolve_widths(&mut nodes, &drivers)?;
+    // Conditionally executed subsystems, innermost first, then algebraic
+    // loops: each becomes one block holding its members.
+    let mut pending = g
+        .conditions
+        .iter()
+        .map(|c| conditional::port_drivers(&nodes, &direct, &index, c))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut containers = Vec::new();
+    for k in (0..g.conditions.len()).rev() {
+        let (outer, rest) = pending.split_at_mut(k);
+        let ports = rest[0].clone();
+        containers.extend(conditional::collapse(&mut nodes, &mut drivers, &g.conditions[k], ports, outer)?);
+    }
     let found = feedthrough_loops(&nodes, &drivers);
     if !found.is_empty() && g.sim.algebraic_loops == AlgebraicLoops::Error {
         return Err(loop_error(&nodes, &found));
     }
-    let mut collapsed = Vec::with_capacity(found.len());
+    let mut loop_descriptions = Vec::with_capacity(found.len());
     for l in &found {
-        collapsed.push(loops::collapse(&mut nodes, &mut drivers, l, loop_tolerance(&g.sim.method))?);
+        let collapsed = loops::collapse(&mut nodes, &mut drivers, l, loops::tolerance(&g.sim.method))?;
+        loop_descriptions.push(collapsed.description);
+        containers.push(collapsed.installed);
     }
     let order = sort(&nodes, &drivers)?;
     let (rates, clocks) = resolve_rates(&nodes, &drivers, &order);
@@ -212,8 +231,9 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
             signal_len += width;
         }
     }
-    // A loop's members' outputs are the loop block's.
-    for c in &collapsed {
+    // Members' outputs are their container's (outer containers first:
+    // an inner one is a member of the outer).
+    for c in containers.iter().rev() {
         for &((member, port), k) in &c.outputs {
             let at = out_offset[c.node][k];
             let ports = &mut out_offset[member];
@@ -244,8 +264,8 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         let ns = block.num_states();
         let rate = rates[&i];
         meta.push(BlockMeta {
-            name: node.label.clone().unwrap_or_else(|| node.flat.path.clone()),
-            type_name: if node.label.is_some() { "algebraic_loop".into() } else { node.flat.spec.type_name.clone() },
+            name: node.label.as_ref().map_or_else(|| node.flat.path.clone(), |l| l.0.clone()),
+            type_name: node.label.as_ref().map_or_else(|| node.flat.spec.type_name.clone(), |l| l.1.to_string()),
             pos: node.flat.spec.pos.clone(),
             rate,
             sample_time: match rate {
@@ -325,19 +345,8 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         external_outputs,
         loop_dead_time: None,
         warnings: Vec::new(),
-        algebraic_loops: collapsed.iter().map(|c| c.description.clone()).collect(),
-        loop_members: collapsed
-            .iter()
-            .flat_map(|c| c.members.iter().map(move |&m| (c.node, m)))
-            .map(|(block, m)| LoopMember {
-                name: nodes[m].flat.path.clone(),
-                type_name: nodes[m].flat.spec.type_name.clone(),
-                loop_block: position[block],
-                input_names: nodes[m].iface.inputs.iter().map(|p| p.name.clone()).collect(),
-                output_names: nodes[m].iface.outputs.iter().map(|p| p.name.clone()).collect(),
-                outputs: out_offset[m].clone(),
-            })
-            .collect(),
+        algebraic_loops: loop_descriptions,
+        inner_blocks: absorb::inner_blocks(&nodes, &containers, &position, &out_offset),
         structure: reuse::Structure::of(g, &nodes, &order),
     };
     plan_and_advise(&mut model);
@@ -357,18 +366,6 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         }
     }
     Ok(model)
-}
-
-/// How closely an algebraic loop's equations are solved: a thousandth of
-/// an adaptive method's relative tolerance (its error control then sees
-/// the loop's signals as exact), 1e-12 under a fixed step.
-fn loop_tolerance(method: &ctlgraph_solver::Method) -> f64 {
-    match *method {
-        ctlgraph_solver::Method::DormandPrince { rtol, .. } | ctlgraph_solver::Method::Trbdf2 { rtol, .. } => {
-            (rtol * 1e-3).clamp(1e-14, 1e-8)
-        }
-        _ => 1e-12,
-    }
 }
 
 fn headers(columns: &[Column]) -> Vec<String> {
@@ -459,7 +456,7 @@ impl Model {
     /// the whole signal name, for messages.
     fn block_output(&self, name: &str, base: &str) -> Result<Port, Diagnostic> {
         let model = self;
-        if let Some(port) = self.loop_member_output(name, base)? {
+        if let Some(port) = self.inner_block_output(name, base)? {
             return Ok(port);
         }
         let (block, port) = match model.meta.iter().position(|m| m.name == base) {
@@ -496,9 +493,9 @@ impl Model {
         Ok(model.out_ports[meta.outputs.start + k])
     }
 
-    /// [`Model::block_output`] of a block inside an algebraic loop's block.
-    fn loop_member_output(&self, name: &str, base: &str) -> Result<Option<Port>, Diagnostic> {
-        let by_name = |n: &str| self.loop_members.iter().find(|m| m.name == n);
+    /// [`Model::block_output`] of a block inside another.
+    fn inner_block_output(&self, name: &str, base: &str) -> Result<Option<Port>, Diagnostic> {
+        let by_name = |n: &str| self.inner_blocks.iter().find(|m| m.name == n);
         if let Some(m) = by_name(base) {
             return match m.outputs[..] {
                 [port] => Ok(Some(port)),

@@ -155,7 +155,7 @@ pub fn reuse_structure(base: &Model, g: &FlatGraph, reg: &Registry) -> Result<Op
         loop_dead_time: None,
         warnings: Vec::new(),
         algebraic_loops: base.algebraic_loops.clone(),
-        loop_members: base.loop_members.clone(),
+        inner_blocks: base.inner_blocks.clone(),
         structure: base.structure.clone(),
     };
     plan_and_advise(&mut model);
