@@ -171,10 +171,10 @@ record: [y: plant]
 
 /// Algebraic loops: Newton's iterations, the Jacobian's columns and the
 /// line search work in space sized at build — under dopri5 (the diode),
-/// and under TR-BDF2 through a stiff plant with feedthrough; and the
-/// Kalman filter's covariance recursion.
+/// and under TR-BDF2 through a stiff plant with feedthrough; enabled and
+/// triggered subsystems; the Kalman filter's covariance recursion.
 #[test]
-fn algebraic_loops_and_the_kalman_filter_allocate_nothing() {
+fn algebraic_loops_conditional_subsystems_and_the_kalman_filter_allocate_nothing() {
     // The diode's 40 ms made a second, to pass the harness's 0.1 s.
     let diode =
         std::fs::read_to_string("graphs/tutorial/algebraic_loop.yaml").unwrap().replace("stop: 0.04", "stop: 1");

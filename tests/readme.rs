@@ -162,7 +162,7 @@ fn the_block_reference_page_is_the_library_as_it_is() {
 fn the_simulink_table_names_registered_types() {
     let start = README.find("| Simulink | ctlgraph |").expect("the table");
     let registry = ctlgraph::registry();
-    let sections = ["scopes:", "record:", "--plot", "--out", "constant:"];
+    let sections = ["scopes:", "record:", "--plot", "--out", "constant:", "enable:", "trigger:"];
     let mut named = 0;
     for row in README[start..].lines().skip(2).take_while(|l| l.starts_with('|')) {
         let ours = row.split('|').nth(2).unwrap();
