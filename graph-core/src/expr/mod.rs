@@ -265,7 +265,18 @@ fn fold(node: Node) -> Node {
         }
         Node::MinMax { args, .. } => args.iter().all(|a| matches!(a, Node::Const(_))),
     };
-    if is_const { Node::Const(eval(&folded, &[])) } else { folded }
+    if is_const {
+        return Node::Const(eval(&folded, &[]));
+    }
+    match folded {
+        // x^2 as x·x: C compilers fold `pow(x, 2.0)` into that product (gcc
+        // at any optimisation level), so evaluating it so keeps the
+        // generated C (`codegen --target c`) equal to the simulation to the
+        // bit — and x·x is correctly rounded, which the C library's `pow`
+        // need not be.
+        Node::Bin(Op::Pow, a, b) if *b == Node::Const(2.0) => Node::Bin(Op::Mul, a.clone(), a),
+        other => other,
+    }
 }
 
 /// The most tokens an expression may have: its tree, evaluated
