@@ -146,3 +146,31 @@ fn refusals_name_the_subsystem_and_the_reason() {
     );
     let _ = path(&graph);
 }
+
+/// A discrete block inside an enabled subsystem keeps its own rate: the
+/// counter's unit delay (T = 0.1 s) advances at its hits while enabled
+/// (0.25 ≤ t < 0.75 and 1.25 ≤ t < 1.75) and holds while disabled. Its
+/// output n = n⁻ + 1 reads 1 from the enabling on, then one more at each
+/// hit after the first: 2 at 0.4, …, 5 at 0.7, held; 6 at 1.3, …, 10 at 1.7.
+#[test]
+fn a_discrete_block_in_an_enabled_subsystem_keeps_its_hits() {
+    let dir = tempfile::tempdir().unwrap();
+    file(dir.path(), "counter.yaml", &COUNTER.replace("sample_time: 1", "sample_time: 0.1"));
+    let trace = run_in(
+        dir.path(),
+        "simulation: { stop: 2, solver: { method: dopri5 } }\nblocks:\n\
+         \x20 en: { type: pulse, period: 1, duty: 0.5, delay: 0.25 }\n\
+         \x20 c: { type: subsystem, file: counter.yaml, enable: true }\nwires: [en -> c.enable]\nrecord: [c]\n",
+    );
+    let want = |t: f64| {
+        let hits = |from: f64, to: f64| ((to.min(t) - from) / 0.1 + 1e-9).floor().max(0.0);
+        if t < 0.25 - 1e-12 {
+            0.0
+        } else if t < 1.25 - 1e-12 {
+            1.0 + hits(0.3, 0.7)
+        } else {
+            5.0 + hits(1.2, 1.7)
+        }
+    };
+    assert!(max_error(&trace, "c", want) < 1e-12, "{}", max_error(&trace, "c", want));
+}
