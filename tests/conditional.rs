@@ -145,6 +145,15 @@ fn refusals_name_the_subsystem_and_the_reason() {
         "{typo}"
     );
     let _ = path(&graph);
+    // An `enable` fed from inside the subsystem closes a loop through it: solved, named after the subsystem.
+    file(
+        dir.path(),
+        "gain.yaml",
+        "blocks:\n  u: { type: inport }\n  g: { type: gain, k: 2 }\n  y: { type: outport }\nwires: [u -> g, g -> y]\n",
+    );
+    std::fs::write(&graph, "blocks:\n  r: { type: sine }\n  s: { type: subsystem, file: gain.yaml, enable: true }\nwires: [r -> s.u, s -> s.enable]\n").unwrap();
+    let model = ctlgraph::compile_file(&graph, &[]).unwrap_or_else(|d| panic!("{d}"));
+    assert!(model.algebraic_loops[0].starts_with("algebraic loop s -> s: solved for s"), "{:?}", model.algebraic_loops);
 }
 
 /// A discrete block inside an enabled subsystem keeps its own rate: the

@@ -111,14 +111,15 @@ pub(super) fn install(
     nodes: &mut Vec<Node>,
     drivers: &mut Vec<Vec<Driver>>,
     members: &[usize],
-    layout: Layout,
+    mut layout: Layout,
     block: Box<dyn Block>,
     label: String,
     kind: &'static str,
 ) -> Installed {
     let node = nodes.len();
     let outputs = layout.port_of.iter().map(|(&k, &v)| (k, v)).collect();
-    for ds in drivers.iter_mut() {
+    // Its own drivers too: a conditional subsystem's `enable` may come from inside it.
+    for ds in drivers.iter_mut().chain([&mut layout.drivers]) {
         for d in ds.iter_mut() {
             if let Some(&k) = layout.port_of.get(&(d.src, d.port)) {
                 (d.src, d.port) = (node, k);

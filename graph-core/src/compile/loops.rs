@@ -66,9 +66,9 @@ pub(super) fn collapse(
         if cut.contains(&k) {
             unknowns.extend_from_slice(layout.outputs_of(m));
             let ports = &nodes[m].iface.outputs;
-            let path = &nodes[m].flat.path;
+            let path = nodes[m].name();
             cut_names.extend(
-                ports.iter().map(|p| if ports.len() > 1 { format!("{path}.{}", p.name) } else { path.clone() }),
+                ports.iter().map(|p| if ports.len() > 1 { format!("{path}.{}", p.name) } else { path.to_string() }),
             );
         }
         built.push(layout.member(nodes, m)?);

@@ -169,6 +169,13 @@ struct Node<'g> {
     absorbed: bool,
 }
 
+impl Node<'_> {
+    /// Its name: a containing block's label, else its path.
+    fn name(&self) -> &str {
+        self.label.as_ref().map_or(self.flat.path.as_str(), |l| l.0.as_str())
+    }
+}
+
 /// Where a real input gets its value: a real block's output port, and the
 /// position of the wire that delivers it.
 #[derive(Clone)]
@@ -264,7 +271,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         let ns = block.num_states();
         let rate = rates[&i];
         meta.push(BlockMeta {
-            name: node.label.as_ref().map_or_else(|| node.flat.path.clone(), |l| l.0.clone()),
+            name: node.name().to_string(),
             type_name: node.label.as_ref().map_or_else(|| node.flat.spec.type_name.clone(), |l| l.1.to_string()),
             pos: node.flat.spec.pos.clone(),
             rate,

@@ -38,7 +38,7 @@ pub(super) struct FeedthroughLoop {
 impl FeedthroughLoop {
     /// `a -> b -> a`.
     pub fn text(&self, nodes: &[Node]) -> String {
-        let names: Vec<&str> = self.cycle.iter().map(|&i| nodes[i].flat.path.as_str()).collect();
+        let names: Vec<&str> = self.cycle.iter().map(|&i| nodes[i].name()).collect();
         format!("{} -> {}", names.join(" -> "), names[0])
     }
 }
