@@ -237,10 +237,6 @@ impl Block for AlgebraicLoop {
         }
     }
 
-    fn not_linearizable(&self) -> Option<&'static str> {
-        Some("an algebraic loop, solved at every evaluation, has no linear model in ctlgraph yet")
-    }
-
     fn diagnose(&self) -> Option<String> {
         if let Some(failure) = self.newton.failure() {
             return Some(format!("algebraic loop {}: {failure}", self.name));
