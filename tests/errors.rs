@@ -507,3 +507,16 @@ fn large_graphs_load_and_alias_bombs_do_not() {
     let d = error(&bomb);
     assert!(d.message.contains("YAML") && d.pos.is_some(), "{d}");
 }
+
+/// An outport wired to itself (found by the structured fuzzer: it hung,
+/// following the wire around) is refused at its line.
+#[test]
+fn ports_wired_in_a_circle_are_refused_not_followed_forever() {
+    let d = error("blocks:\n  b0: { type: outport }\nwires: [b0 -> b0]\n");
+    assert!(d.message.contains("comes back to it through ports only"), "{d}");
+    assert_eq!(d.pos.map(|p| (p.line, p.col)), Some((2, 3)));
+    let d = error(
+        "blocks:\n  u: { type: step }\n  a: { type: outport }\n  b: { type: outport }\nwires: [a -> b, b -> a]\nrecord: [a]\n",
+    );
+    assert!(d.message.contains("comes back to it"), "{d}");
+}

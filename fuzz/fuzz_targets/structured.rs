@@ -8,6 +8,7 @@
 
 use libfuzzer_sys::arbitrary::{self, Arbitrary};
 use libfuzzer_sys::fuzz_target;
+use ctlgraph::core::ParamDefault;
 use std::fmt::Write;
 
 #[derive(Arbitrary, Debug)]
@@ -45,9 +46,17 @@ const EXPRS: &[&str] = &["\"t\"", "\"sin(t)\"", "\"u1 + u2\"", "\"1/0\"", "\"u^2
 const SOLVERS: &[&str] = &["rk4", "euler", "heun", "dopri5", "trbdf2"];
 const STEPS: &[&str] = &["1e-3", "0.01", "0.1", "1e-5", "0.05"];
 
-fn value(v: &Value, default: Option<&str>) -> String {
+/// A parameter's default as a graph writes it, if it has one the parser reads.
+fn written(default: ParamDefault) -> Option<String> {
+    match default {
+        ParamDefault::Required | ParamDefault::Described(_) => None,
+        other => Some(other.to_string()),
+    }
+}
+
+fn value(v: &Value, default: Option<String>) -> String {
     match v {
-        Value::Default => default.unwrap_or("1").to_string(),
+        Value::Default => default.unwrap_or_else(|| "1".to_string()),
         Value::Edge(k) => EDGES[*k as usize % EDGES.len()].to_string(),
         Value::Number(x) if x.is_finite() => format!("{x:e}"),
         Value::Number(_) => ".nan".to_string(),
@@ -71,7 +80,7 @@ fn render(g: &Graph, registry: &ctlgraph::core::Registry) -> String {
     for (i, (b, t)) in chosen.iter().enumerate() {
         let mut params = Vec::new();
         if !b.omit_required {
-            for p in t.params.iter().filter(|p| p.default.is_none()) {
+            for p in t.params.iter().filter(|p| matches!(p.default, ParamDefault::Required)) {
                 params.push(format!("{}: 1", p.name));
             }
         }
@@ -81,7 +90,7 @@ fn render(g: &Graph, registry: &ctlgraph::core::Registry) -> String {
             }
             let p = &t.params[*k as usize % t.params.len()];
             params.retain(|q: &String| !q.starts_with(&format!("{}:", p.name)));
-            params.push(format!("{}: {}", p.name, value(v, p.default)));
+            params.push(format!("{}: {}", p.name, value(v, written(p.default))));
         }
         let _ = writeln!(text, "  b{i}: {{ type: {}{}{} }}", t.name, if params.is_empty() { "" } else { ", " }, params.join(", "));
     }

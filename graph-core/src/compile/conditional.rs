@@ -2,6 +2,7 @@
 //! ([`crate::conditional::Conditional`]): the subsystem's blocks, their
 //! inputs from outside, and its `enable` and `trigger` ports' signals.
 
+use super::wiring::{Source, real_source};
 use super::{Driver, Node, absorb, loops::topological, resolved};
 use crate::block::SampleTime;
 use crate::conditional::Conditional;
@@ -29,19 +30,9 @@ pub(super) fn port_drivers(
             Diagnostic::at(&c.pos, format!("subsystem `{}`: its `{name}` port is not wired", c.path))
                 .with_hint(format!("wire a signal to it: `- SIGNAL -> {}.{name}`", c.path))
         };
-        let mut at = *index.get(path.as_str()).ok_or_else(unwired)?;
-        let mut hops = 0;
-        let d = loop {
-            let d = direct[at].first().cloned().flatten().ok_or_else(unwired)?;
-            if !nodes[d.src].is_virtual {
-                break d;
-            }
-            at = d.src;
-            hops += 1;
-            if hops > nodes.len() {
-                return Err(unwired());
-            }
-        };
+        let at = *index.get(path.as_str()).ok_or_else(unwired)?;
+        let Source::Real(src, port) = real_source(nodes, direct, at) else { return Err(unwired()) };
+        let d = Driver { src, port, pos: c.pos.clone() };
         let width = resolved(nodes[d.src].iface.outputs[d.port].width, nodes[d.src].width);
         if width != 1 {
             return Err(Diagnostic::at(

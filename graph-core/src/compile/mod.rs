@@ -311,7 +311,7 @@ pub fn compile(g: &FlatGraph, reg: &Registry) -> Result<Model, Diagnostic> {
         .filter(|&(_, &i)| nodes[i].flat.spec.type_name == INPORT && !nodes[i].flat.path.contains('/'))
         .map(|(k, &i)| (nodes[i].flat.path.clone(), k))
         .collect();
-    let external_outputs = wiring::external_outputs(&nodes, &direct, &out_offset);
+    let external_outputs = wiring::external_outputs(&nodes, &direct, &out_offset)?;
     let slots = meta
         .iter()
         .map(|m| Slot { rate: m.rate, states: m.states.clone(), inputs: m.inputs.clone(), outputs: m.outputs.clone() })

@@ -250,6 +250,29 @@ pub(super) fn set_common_width(flat: &FlatBlock, block: &mut dyn Block, width: u
 
 /// The columns of the output: the `record:` list, or by default every
 /// output of every top-level block.
+/// What a subsystem port or outport (a virtual node) passes on.
+pub(super) enum Source {
+    /// This output port of this real block.
+    Real(usize, usize),
+    Unwired,
+    /// The ports' wires come back to one of them.
+    Circle,
+}
+
+/// The real block output behind virtual node `start` (through any chain
+/// of subsystem ports and outports), bounded so a circle ends.
+pub(super) fn real_source(nodes: &[Node], direct: &[Vec<Option<Driver>>], start: usize) -> Source {
+    let (mut src, mut port) = (start, 0);
+    for _ in 0..=nodes.len() {
+        if !nodes[src].is_virtual {
+            return Source::Real(src, port);
+        }
+        let Some(Some(d)) = direct[src].first() else { return Source::Unwired };
+        (src, port) = (d.src, d.port);
+    }
+    Source::Circle
+}
+
 /// The real signal on each port of a subsystem, by the names a user
 /// writes: `sub.port` (an inport: the signal wired to it; an outport: the
 /// signal it exports), and `sub` for a subsystem with one outport; a
@@ -264,15 +287,8 @@ pub(super) fn subsystem_ports(
     let mut named = Vec::new();
     for (sub, (ins, outs)) in &g.subsystems {
         for port in ins.iter().chain(outs) {
-            let Some(&(mut src)) = index.get(format!("{sub}/{port}").as_str()) else { continue };
-            let mut p = 0;
-            while nodes[src].is_virtual {
-                let Some(d) = &direct[src][0] else { break };
-                (src, p) = (d.src, d.port);
-            }
-            if nodes[src].is_virtual {
-                continue;
-            }
+            let Some(&start) = index.get(format!("{sub}/{port}").as_str()) else { continue };
+            let Source::Real(src, p) = real_source(nodes, direct, start) else { continue };
             named.push((format!("{sub}.{port}"), out_offset[src][p]));
             if outs.len() == 1 && outs.contains(port) {
                 named.push((sub.clone(), out_offset[src][p]));
@@ -288,22 +304,24 @@ pub(super) fn external_outputs(
     nodes: &[Node],
     direct: &[Vec<Option<Driver>>],
     out_offset: &[Vec<Port>],
-) -> Vec<(String, Port)> {
+) -> Result<Vec<(String, Port)>, Diagnostic> {
     let mut named = Vec::new();
     for (i, node) in nodes.iter().enumerate() {
         if node.flat.spec.type_name != OUTPORT || node.flat.path.contains('/') {
             continue;
         }
-        let (mut src, mut p) = (i, 0);
-        while nodes[src].is_virtual {
-            let Some(d) = &direct[src][0] else { break };
-            (src, p) = (d.src, d.port);
-        }
-        if !nodes[src].is_virtual {
-            named.push((node.flat.path.clone(), out_offset[src][p]));
+        match real_source(nodes, direct, i) {
+            Source::Real(src, p) => named.push((node.flat.path.clone(), out_offset[src][p])),
+            Source::Unwired => {}
+            Source::Circle => return Err(circle(node)),
         }
     }
-    named
+    Ok(named)
+}
+
+fn circle(node: &Node) -> Diagnostic {
+    Diagnostic::at(&node.flat.spec.pos, format!("`{}`: its wire comes back to it through ports only", node.flat.path))
+        .with_hint("an outport or a subsystem port passes a signal on: wire a block's output to it")
 }
 
 pub(super) fn record_columns(
@@ -360,13 +378,15 @@ pub(super) fn record_columns(
             return Err(Diagnostic::at(&ep.pos, format!("record: no block named `{}`", ep.block))
                 .suggest(&ep.block, index.keys().copied()));
         };
-        let (mut src, mut port) = (i, port_index(&nodes[i], &target, false)?);
-        while nodes[src].is_virtual {
-            let Some(d) = &direct[src][0] else {
-                return Err(Diagnostic::at(&ep.pos, format!("record: `{}` is not wired", nodes[src].flat.path)));
-            };
-            (src, port) = (d.src, d.port);
-        }
+        let port = port_index(&nodes[i], &target, false)?;
+        let (src, port) = match real_source(nodes, direct, i) {
+            _ if !nodes[i].is_virtual => (i, port),
+            Source::Real(src, port) => (src, port),
+            Source::Unwired => {
+                return Err(Diagnostic::at(&ep.pos, format!("record: `{}` is not wired", nodes[i].flat.path)));
+            }
+            Source::Circle => return Err(circle(&nodes[i])),
+        };
         push(name.clone(), out_offset[src][port], Some(&ep.pos), rec.unit.clone())?;
     }
     Ok(columns)
