@@ -520,3 +520,11 @@ fn ports_wired_in_a_circle_are_refused_not_followed_forever() {
     );
     assert!(d.message.contains("comes back to it"), "{d}");
 }
+
+/// A path of no points (found by the structured fuzzer: it indexed the
+/// first point) is refused at its key.
+#[test]
+fn a_path_without_points_is_refused() {
+    let d = error("blocks:\n  p: { type: bspline_path, points: [] }\n");
+    assert!(d.message.contains("every point needs 2 or 3 coordinates"), "{d}");
+}

@@ -119,7 +119,7 @@ fn read_points(p: &mut Params, prefix: &str) -> Result<Option<(Vec<f64>, usize)>
     match (p.has(points_key), p.has(curve_key)) {
         (true, _) => {
             let rows = p.matrix(points_key)?;
-            let dim = rows[0].len();
+            let dim = rows.first().map_or(0, Vec::len);
             if !(2..=3).contains(&dim) || rows.iter().any(|r| r.len() != dim) {
                 return Err(p.error(points_key, "every point needs 2 or 3 coordinates, all alike"));
             }
