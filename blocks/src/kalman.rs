@@ -173,8 +173,9 @@ impl Block for KalmanFilter {
 
 /// A matrix parameter of `rows`×`cols`, or an error at its key.
 fn sized(p: &mut Params, key: &str, rows: usize, cols: usize) -> Result<Mat, Diagnostic> {
-    let m = Mat::from_rows(&p.matrix(key)?);
-    let ragged = p.matrix(key)?.iter().any(|r| r.len() != m.cols);
+    let given = p.matrix(key)?;
+    let m = Mat::from_rows(&given);
+    let ragged = given.iter().any(|r| r.len() != m.cols);
     if ragged || m.rows != rows || m.cols != cols {
         return Err(p.error(key, format!("expected {rows}×{cols}, got {}×{}", m.rows, m.cols)));
     }

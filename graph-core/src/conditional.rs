@@ -19,26 +19,18 @@
 //! - **Both**: an edge runs them only while enabled.
 
 use crate::block::{Block, Crossing, Io, Port};
-use crate::composite::{Call, Member, share};
+use crate::composite::{Call, Inner, Member};
 use crate::flatten::{Edge, Enable};
-use std::sync::Mutex;
 
 /// A conditionally executed subsystem as one block.
+#[derive(Clone)]
 pub struct Conditional {
-    name: String,
-    /// In evaluation order.
-    members: Vec<Member>,
-    /// Where inputs 0.. (the members' inputs from outside) go in the buffer.
-    external: Vec<Port>,
-    /// Where each output (every member's) is in the buffer.
-    outputs: Vec<Port>,
-    buffer: Vec<f64>,
+    /// The subsystem's blocks; its inputs 0.. are theirs from outside.
+    inner: Inner,
     /// The enable mode and the input it reads.
     enable: Option<(Enable, usize)>,
     /// The trigger's edge and the input it reads.
     trigger: Option<(Edge, usize)>,
-    n_states: usize,
-    n_member_crossings: usize,
     /// The run's state: whether enabled; the trigger input at the last
     /// major step (NaN before the first: no edge at t = 0); whether it
     /// fired at this major step; which own crossing was located.
@@ -50,33 +42,6 @@ pub struct Conditional {
     trigger_located: bool,
     /// The outputs as last computed, shown while the blocks do not run.
     held: Vec<f64>,
-    crossing_buffer: Mutex<Vec<f64>>,
-}
-
-impl Clone for Conditional {
-    fn clone(&self) -> Self {
-        let crossing_buffer =
-            Mutex::new(self.crossing_buffer.lock().map_or_else(|e| e.into_inner().clone(), |b| b.clone()));
-        Conditional {
-            name: self.name.clone(),
-            members: self.members.clone(),
-            external: self.external.clone(),
-            outputs: self.outputs.clone(),
-            buffer: self.buffer.clone(),
-            enable: self.enable,
-            trigger: self.trigger,
-            n_states: self.n_states,
-            n_member_crossings: self.n_member_crossings,
-            enabled: self.enabled,
-            trigger_before: self.trigger_before,
-            trigger_after: self.trigger_after,
-            fired: self.fired,
-            enable_located: self.enable_located,
-            trigger_located: self.trigger_located,
-            held: self.held.clone(),
-            crossing_buffer,
-        }
-    }
 }
 
 /// Whether `t` is a sample hit `offset + k·period` (the expression
@@ -90,26 +55,18 @@ impl Conditional {
     /// `members` in evaluation order; the first `external.len()` inputs go
     /// to them, then come `enable` and `trigger` at the indices given.
     pub fn new(
-        name: String,
-        mut members: Vec<Member>,
+        members: Vec<Member>,
         external: Vec<Port>,
         outputs: Vec<Port>,
         buffer_len: usize,
         enable: Option<(Enable, usize)>,
         trigger: Option<(Edge, usize)>,
     ) -> Conditional {
-        let (n_states, n_member_crossings) = share(&mut members);
         let held = vec![0.0; outputs.iter().map(|p| p.width).sum()];
         Conditional {
-            name,
-            members,
-            external,
-            outputs,
-            buffer: vec![0.0; buffer_len],
+            inner: Inner::new(members, external, outputs, buffer_len),
             enable,
             trigger,
-            n_states,
-            n_member_crossings,
             enabled: enable.is_none(),
             trigger_before: f64::NAN,
             trigger_after: None,
@@ -117,7 +74,6 @@ impl Conditional {
             enable_located: false,
             trigger_located: false,
             held,
-            crossing_buffer: Mutex::new(vec![0.0; buffer_len]),
         }
     }
 
@@ -126,25 +82,28 @@ impl Conditional {
         self.trigger.is_none() && self.enabled
     }
 
-    fn copy_inputs(&mut self, io: &Io) {
-        for (k, slot) in self.external.iter().enumerate() {
-            self.buffer[slot.offset..slot.offset + slot.width].copy_from_slice(io.input(k));
-        }
-    }
-
-    /// The members' outputs: those due now (a triggered subsystem's all).
-    fn run_outputs(&mut self, call: Call, x: &[f64]) {
+    /// The members' outputs (or, `update`, updates): those due now — a
+    /// triggered subsystem's all, an enabled one's of own discrete rate at
+    /// their hits only; the outputs are kept to hold.
+    fn run(&mut self, call: Call, x: &[f64], update: bool) {
         let triggered = self.trigger.is_some();
-        for m in &mut self.members {
-            let due = triggered || m.hits.is_none_or(|h| call.major && is_hit(call.t, h));
-            if due {
-                let mut mio = call.io((&m.ins, &m.outs), &x[m.states.clone()], &mut self.buffer);
-                m.block.output(&mut mio);
+        let inner = &mut self.inner;
+        for m in &mut inner.members {
+            if triggered || m.hits.is_none_or(|h| call.major && is_hit(call.t, h)) {
+                let mut mio = call.io((&m.ins, &m.outs), &x[m.states.clone()], &mut inner.buffer);
+                if update {
+                    m.block.update(&mut mio);
+                } else {
+                    m.block.output(&mut mio);
+                }
             }
         }
+        if update {
+            return;
+        }
         let mut k = 0;
-        for slot in &self.outputs {
-            self.held[k..k + slot.width].copy_from_slice(&self.buffer[slot.offset..slot.offset + slot.width]);
+        for slot in &inner.outputs {
+            self.held[k..k + slot.width].copy_from_slice(&inner.buffer[slot.offset..slot.offset + slot.width]);
             k += slot.width;
         }
     }
@@ -162,14 +121,11 @@ impl Conditional {
 
 impl Block for Conditional {
     fn num_states(&self) -> usize {
-        self.n_states
+        self.inner.n_states
     }
 
     fn initialize(&mut self, x0: &mut [f64]) {
-        for m in &mut self.members {
-            m.block.initialize(&mut x0[m.states.clone()]);
-        }
-        self.buffer.iter_mut().for_each(|v| *v = 0.0);
+        self.inner.initialize(x0);
         self.held.iter_mut().for_each(|v| *v = 0.0);
         self.enabled = self.enable.is_none();
         self.trigger_before = f64::NAN;
@@ -181,12 +137,12 @@ impl Block for Conditional {
 
     fn output(&mut self, io: &mut Io) {
         if self.running() {
-            self.copy_inputs(io);
-            self.run_outputs(Call::of(io), io.x);
+            self.inner.copy_inputs(io);
+            self.run(Call::of(io), io.x, false);
         }
         let zero = self.reset_outputs();
         let mut k = 0;
-        for port in 0..self.outputs.len() {
+        for port in 0..self.inner.outputs.len() {
             let out = io.output(port);
             let n = out.len();
             if zero {
@@ -205,7 +161,7 @@ impl Block for Conditional {
             let now = if std::mem::take(&mut self.enable_located) { !self.enabled } else { io.u(input) > 0.0 };
             if now != self.enabled {
                 if now && mode.reset_states {
-                    for m in &mut self.members {
+                    for m in &mut self.inner.members {
                         m.block.initialize(&mut x[m.states.clone()]);
                     }
                 }
@@ -214,11 +170,7 @@ impl Block for Conditional {
             }
         }
         if self.running() {
-            let call = Call::of(io);
-            for m in self.members.iter_mut().filter(|m| m.block.needs_major_step()) {
-                let mio = call.io((&m.ins, &m.outs), &[], &mut self.buffer);
-                changed |= m.block.major_step(&mio, &mut x[m.states.clone()]);
-            }
+            changed |= self.inner.major_step(Call::of(io), x);
         }
         if let Some((edge, input)) = self.trigger
             && !self.fired
@@ -236,8 +188,8 @@ impl Block for Conditional {
                 self.trigger_after = Some(if rising { f64::MIN_POSITIVE } else { -f64::MIN_POSITIVE });
             }
             if (located || edge.between(self.trigger_before, now)) && self.enabled {
-                self.copy_inputs(io);
-                self.run_outputs(Call::of(io), &[]);
+                self.inner.copy_inputs(io);
+                self.run(Call::of(io), &[], false);
                 self.fired = true;
                 changed = true;
             }
@@ -249,37 +201,25 @@ impl Block for Conditional {
         let call = Call::of(io);
         if let Some((_, input)) = self.trigger {
             if std::mem::take(&mut self.fired) {
-                for m in &mut self.members {
-                    let mut mio = call.io((&m.ins, &m.outs), &[], &mut self.buffer);
-                    m.block.update(&mut mio);
-                }
+                self.run(call, &[], true);
             }
             self.trigger_before = self.trigger_after.take().unwrap_or_else(|| io.u(input));
         } else if self.enabled {
-            for m in &mut self.members {
-                if m.hits.is_none_or(|h| is_hit(call.t, h)) {
-                    let mut mio = call.io((&m.ins, &m.outs), &io.x[m.states.clone()], &mut self.buffer);
-                    m.block.update(&mut mio);
-                }
-            }
+            self.run(call, io.x, true);
         }
     }
 
     /// Held while disabled: the states stand still.
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
-        if !self.running() {
+        if self.running() {
+            self.inner.derivatives(Call::of(io), io.x, dx);
+        } else {
             dx.iter_mut().for_each(|d| *d = 0.0);
-            return;
-        }
-        let call = Call::of(io);
-        for m in self.members.iter_mut().filter(|m| !m.states.is_empty()) {
-            let mio = call.io((&m.ins, &m.outs), &io.x[m.states.clone()], &mut self.buffer);
-            m.block.derivatives(&mio, &mut dx[m.states.clone()]);
         }
     }
 
     fn clamp_states(&self, x: &mut [f64]) -> bool {
-        self.members.iter().fold(false, |moved, m| m.block.clamp_states(&mut x[m.states.clone()]) | moved)
+        self.inner.clamp_states(x)
     }
 
     /// The members' own events while they run continuously, and the sample
@@ -288,24 +228,20 @@ impl Block for Conditional {
         if self.trigger.is_some() {
             return f64::INFINITY;
         }
-        let mut next = f64::INFINITY;
-        for m in &self.members {
-            next = next.min(m.block.next_event(t));
-            if let Some((period, offset)) = m.hits {
-                let k = ((t - offset) / period).floor().max(0.0);
-                let hit = [k - 1.0, k, k + 1.0, k + 2.0]
-                    .into_iter()
-                    .filter(|&k| k >= 0.0)
-                    .map(|k| offset + k * period)
-                    .find(|&e| e > t);
-                next = next.min(hit.unwrap_or(f64::INFINITY));
-            }
-        }
-        next
+        let hits = self.inner.members.iter().filter_map(|m| m.hits).map(|(period, offset)| {
+            let k = ((t - offset) / period).floor().max(0.0);
+            [k - 1.0, k, k + 1.0, k + 2.0]
+                .into_iter()
+                .filter(|&k| k >= 0.0)
+                .map(|k| offset + k * period)
+                .find(|&e| e > t)
+                .unwrap_or(f64::INFINITY)
+        });
+        hits.fold(self.inner.next_event(t), f64::min)
     }
 
     fn num_zero_crossings(&self) -> usize {
-        self.n_member_crossings + self.own_crossings()
+        self.inner.n_crossings + self.own_crossings()
     }
 
     fn needs_major_step(&self) -> bool {
@@ -313,15 +249,9 @@ impl Block for Conditional {
     }
 
     fn zero_crossings(&self, io: &Io, g: &mut [f64]) {
-        let own = self.n_member_crossings;
+        let own = self.inner.n_crossings;
         if self.running() {
-            let call = Call::of(io);
-            let mut buffer = self.crossing_buffer.lock().unwrap_or_else(|e| e.into_inner());
-            buffer.copy_from_slice(&self.buffer);
-            for m in self.members.iter().filter(|m| !m.crossings.is_empty()) {
-                let mio = call.io((&m.ins, &m.outs), &io.x[m.states.clone()], &mut buffer);
-                m.block.zero_crossings(&mio, &mut g[m.crossings.clone()]);
-            }
+            self.inner.zero_crossings(Call::of(io), io.x, g);
         } else {
             // Not running: no member's event.
             g[..own].iter_mut().for_each(|v| *v = 1.0);
@@ -337,16 +267,10 @@ impl Block for Conditional {
     }
 
     fn crossing_direction(&self, k: usize) -> Crossing {
-        if k < self.n_member_crossings {
-            if !self.running() {
-                return Crossing::Ignore;
-            }
-            return match self.members.iter().find(|m| m.crossings.contains(&k)) {
-                Some(m) => m.block.crossing_direction(k - m.crossings.start),
-                None => Crossing::Ignore,
-            };
+        if k < self.inner.n_crossings {
+            return if self.running() { self.inner.crossing_direction(k) } else { Crossing::Ignore };
         }
-        let own = k - self.n_member_crossings;
+        let own = k - self.inner.n_crossings;
         match (own, self.enable.is_some(), self.trigger) {
             (0, true, _) => Crossing::Either,
             (_, _, Some((Edge::Rising, _))) => Crossing::Rising,
@@ -356,14 +280,11 @@ impl Block for Conditional {
     }
 
     fn crossing_located(&mut self, k: usize) {
-        if k < self.n_member_crossings {
-            if let Some(m) = self.members.iter_mut().find(|m| m.crossings.contains(&k)) {
-                let j = k - m.crossings.start;
-                m.block.crossing_located(j);
-            }
+        if k < self.inner.n_crossings {
+            self.inner.crossing_located(k);
             return;
         }
-        match (k - self.n_member_crossings, self.enable.is_some()) {
+        match (k - self.inner.n_crossings, self.enable.is_some()) {
             (0, true) => self.enable_located = true,
             _ => self.trigger_located = true,
         }
@@ -374,12 +295,10 @@ impl Block for Conditional {
     }
 
     fn diagnose(&self) -> Option<String> {
-        self.members.iter().find_map(|m| m.block.diagnose().map(|d| format!("{} ({}): {d}", m.name, self.name)))
+        self.inner.diagnose()
     }
 
     fn build_report(&self) -> Option<String> {
-        let reports: Vec<String> =
-            self.members.iter().filter_map(|m| m.block.build_report().map(|r| format!("{}: {r}", m.name))).collect();
-        (!reports.is_empty()).then(|| reports.join("; "))
+        self.inner.build_report()
     }
 }

@@ -8,49 +8,20 @@
 
 mod newton;
 
-use crate::block::{Block, Breakpoint, Crossing, Io, Port};
-use crate::composite::{Call, Member};
+use crate::block::{Block, Crossing, Io, Port};
+use crate::composite::{Call, Inner, Member};
 use newton::Newton;
-use std::sync::Mutex;
 
 /// An algebraic loop as one block.
+#[derive(Clone)]
 pub struct AlgebraicLoop {
     /// `a -> b -> a`, for messages.
     name: String,
     /// In evaluation order: the members not cut in dependency order, then
     /// the `n_cut` whose outputs are the unknowns.
-    members: Vec<Member>,
+    inner: Inner,
     n_cut: usize,
-    /// Where each of the loop block's inputs is copied in the buffer.
-    external: Vec<Port>,
-    /// Where each of its outputs (its members') lies in the buffer.
-    outputs: Vec<Port>,
-    buffer: Vec<f64>,
     newton: Newton,
-    /// A copy of the buffer for [`Block::zero_crossings`], which takes the
-    /// block by shared reference (no allocation: sized at build).
-    crossing_buffer: Mutex<Vec<f64>>,
-    n_states: usize,
-    n_crossings: usize,
-}
-
-impl Clone for AlgebraicLoop {
-    fn clone(&self) -> Self {
-        let crossing_buffer =
-            Mutex::new(self.crossing_buffer.lock().map_or_else(|e| e.into_inner().clone(), |b| b.clone()));
-        AlgebraicLoop {
-            name: self.name.clone(),
-            members: self.members.clone(),
-            n_cut: self.n_cut,
-            external: self.external.clone(),
-            outputs: self.outputs.clone(),
-            buffer: self.buffer.clone(),
-            newton: self.newton.clone(),
-            crossing_buffer,
-            n_states: self.n_states,
-            n_crossings: self.n_crossings,
-        }
-    }
 }
 
 impl AlgebraicLoop {
@@ -60,7 +31,7 @@ impl AlgebraicLoop {
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         name: String,
-        mut members: Vec<Member>,
+        members: Vec<Member>,
         n_cut: usize,
         external: Vec<Port>,
         outputs: Vec<Port>,
@@ -68,25 +39,8 @@ impl AlgebraicLoop {
         buffer_len: usize,
         tolerance: f64,
     ) -> AlgebraicLoop {
-        let (n_states, n_crossings) = crate::composite::share(&mut members);
-        AlgebraicLoop {
-            name,
-            members,
-            n_cut,
-            external,
-            outputs,
-            buffer: vec![0.0; buffer_len],
-            newton: Newton::new(unknowns, tolerance),
-            crossing_buffer: Mutex::new(vec![0.0; buffer_len]),
-            n_states,
-            n_crossings,
-        }
-    }
-
-    /// The member holding zero-crossing function `k` of the loop, and its own index.
-    fn crossing(&self, k: usize) -> Option<(usize, usize)> {
-        let m = self.members.iter().position(|m| m.crossings.contains(&k))?;
-        Some((m, k - self.members[m].crossings.start))
+        let inner = Inner::new(members, external, outputs, buffer_len);
+        AlgebraicLoop { name, inner, n_cut, newton: Newton::new(unknowns, tolerance) }
     }
 }
 
@@ -119,14 +73,11 @@ impl newton::Equations for Equations<'_> {
 
 impl Block for AlgebraicLoop {
     fn num_states(&self) -> usize {
-        self.n_states
+        self.inner.n_states
     }
 
     fn initialize(&mut self, x0: &mut [f64]) {
-        for m in &mut self.members {
-            m.block.initialize(&mut x0[m.states.clone()]);
-        }
-        self.buffer.iter_mut().for_each(|v| *v = 0.0);
+        self.inner.initialize(x0);
         self.newton.reset();
     }
 
@@ -135,18 +86,16 @@ impl Block for AlgebraicLoop {
     /// and outputs every member's outputs. A loop that cannot be solved
     /// outputs NaN: the run stops there, naming the loop ([`Block::diagnose`]).
     fn output(&mut self, io: &mut Io) {
-        for (k, slot) in self.external.iter().enumerate() {
-            self.buffer[slot.offset..slot.offset + slot.width].copy_from_slice(io.input(k));
-        }
+        self.inner.copy_inputs(io);
+        let inner = &mut self.inner;
         let call = Call::of(io);
         let mut eq =
-            Equations { members: &mut self.members, n_cut: self.n_cut, buffer: &mut self.buffer, call, x: io.x };
+            Equations { members: &mut inner.members, n_cut: self.n_cut, buffer: &mut inner.buffer, call, x: io.x };
         let solved = self.newton.solve(&mut eq);
-        for (k, slot) in self.outputs.iter().enumerate() {
-            let values = &self.buffer[slot.offset..slot.offset + slot.width];
+        for (k, slot) in inner.outputs.iter().enumerate() {
             let out = io.output(k);
             if solved {
-                out.copy_from_slice(values);
+                out.copy_from_slice(&inner.buffer[slot.offset..slot.offset + slot.width]);
             } else {
                 out.iter_mut().for_each(|v| *v = f64::NAN);
             }
@@ -155,98 +104,67 @@ impl Block for AlgebraicLoop {
 
     fn update(&mut self, io: &mut Io) {
         let call = Call::of(io);
-        for m in &mut self.members {
-            let mut mio = call.io((&m.ins, &m.outs), &io.x[m.states.clone()], &mut self.buffer);
+        let inner = &mut self.inner;
+        for m in &mut inner.members {
+            let mut mio = call.io((&m.ins, &m.outs), &io.x[m.states.clone()], &mut inner.buffer);
             m.block.update(&mut mio);
         }
-        self.newton.remember(&self.buffer);
+        self.newton.remember(&inner.buffer);
     }
 
     fn derivatives(&mut self, io: &Io, dx: &mut [f64]) {
-        let call = Call::of(io);
-        for m in self.members.iter_mut().filter(|m| !m.states.is_empty()) {
-            let mio = call.io((&m.ins, &m.outs), &io.x[m.states.clone()], &mut self.buffer);
-            m.block.derivatives(&mio, &mut dx[m.states.clone()]);
-        }
+        self.inner.derivatives(Call::of(io), io.x, dx);
     }
 
     fn clamp_states(&self, x: &mut [f64]) -> bool {
-        self.members.iter().fold(false, |moved, m| m.block.clamp_states(&mut x[m.states.clone()]) | moved)
+        self.inner.clamp_states(x)
     }
 
     fn next_event(&self, t: f64) -> f64 {
-        self.members.iter().map(|m| m.block.next_event(t)).fold(f64::INFINITY, f64::min)
+        self.inner.next_event(t)
     }
 
     fn event_generation(&self, t: f64) -> u32 {
-        self.members
-            .iter()
-            .filter(|m| m.block.next_event(t) == t)
-            .map(|m| m.block.event_generation(t))
-            .min()
-            .unwrap_or(0)
+        let members = &self.inner.members;
+        members.iter().filter(|m| m.block.next_event(t) == t).map(|m| m.block.event_generation(t)).min().unwrap_or(0)
     }
 
     fn min_event_spacing(&self) -> f64 {
-        self.members.iter().map(|m| m.block.min_event_spacing()).fold(f64::INFINITY, f64::min)
+        self.inner.members.iter().map(|m| m.block.min_event_spacing()).fold(f64::INFINITY, f64::min)
     }
 
     fn num_zero_crossings(&self) -> usize {
-        self.n_crossings
+        self.inner.n_crossings
     }
 
     fn needs_major_step(&self) -> bool {
-        self.members.iter().any(|m| m.block.needs_major_step())
+        self.inner.members.iter().any(|m| m.block.needs_major_step())
     }
 
     fn zero_crossings(&self, io: &Io, g: &mut [f64]) {
-        let call = Call::of(io);
-        let mut buffer = self.crossing_buffer.lock().unwrap_or_else(|e| e.into_inner());
-        buffer.copy_from_slice(&self.buffer);
-        for m in self.members.iter().filter(|m| !m.crossings.is_empty()) {
-            let mio = call.io((&m.ins, &m.outs), &io.x[m.states.clone()], &mut buffer);
-            m.block.zero_crossings(&mio, &mut g[m.crossings.clone()]);
-        }
+        self.inner.zero_crossings(Call::of(io), io.x, g);
     }
 
     fn crossing_direction(&self, k: usize) -> Crossing {
-        self.crossing(k).map_or(Crossing::Ignore, |(m, j)| self.members[m].block.crossing_direction(j))
+        self.inner.crossing_direction(k)
     }
 
     fn crossing_located(&mut self, k: usize) {
-        if let Some((m, j)) = self.crossing(k) {
-            self.members[m].block.crossing_located(j);
-        }
+        self.inner.crossing_located(k);
     }
 
     fn major_step(&mut self, io: &Io, x: &mut [f64]) -> bool {
-        let call = Call::of(io);
-        let mut changed = false;
-        for m in self.members.iter_mut().filter(|m| m.block.needs_major_step()) {
-            let mio = call.io((&m.ins, &m.outs), &[], &mut self.buffer);
-            changed |= m.block.major_step(&mio, &mut x[m.states.clone()]);
-        }
-        changed
-    }
-
-    fn left_limit(&mut self, io: &Io, at: Breakpoint) {
-        let call = Call::of(io);
-        for m in &mut self.members {
-            let mio = call.io((&m.ins, &m.outs), &io.x[m.states.clone()], &mut self.buffer);
-            m.block.left_limit(&mio, at);
-        }
+        self.inner.major_step(Call::of(io), x)
     }
 
     fn diagnose(&self) -> Option<String> {
-        if let Some(failure) = self.newton.failure() {
-            return Some(format!("algebraic loop {}: {failure}", self.name));
+        match self.newton.failure() {
+            Some(failure) => Some(format!("algebraic loop {}: {failure}", self.name)),
+            None => self.inner.diagnose(),
         }
-        self.members.iter().find_map(|m| m.block.diagnose().map(|d| format!("{}: {d}", m.name)))
     }
 
     fn build_report(&self) -> Option<String> {
-        let reports: Vec<String> =
-            self.members.iter().filter_map(|m| m.block.build_report().map(|r| format!("{}: {r}", m.name))).collect();
-        (!reports.is_empty()).then(|| reports.join("; "))
+        self.inner.build_report()
     }
 }

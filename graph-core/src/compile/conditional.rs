@@ -120,7 +120,6 @@ pub(super) fn collapse(
         _ => "triggered_subsystem",
     };
     let block = Conditional::new(
-        c.path.clone(),
         built,
         layout.external.clone(),
         layout.outputs.clone(),
