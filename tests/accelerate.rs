@@ -10,6 +10,7 @@
 
 mod common;
 use common::{accelerate_cache as cache, text};
+use ctlgraph::accel::{Accelerate, Runner, Stepper};
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -155,4 +156,97 @@ fn the_graph_file_can_ask_for_acceleration_and_the_report_records_it() {
         listing.contains("pid_loop.yaml\n  note: running interpreted, not accelerated: no Rust toolchain"),
         "{listing}"
     );
+}
+
+/// Points this process's accelerated runs at the tests' cache. Every test
+/// here uses that one cache (the subprocesses are told it explicitly), and
+/// std orders `set_var` with its own reads of the environment.
+fn cache_in_process() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    // SAFETY: no C code of this test process reads the environment
+    // concurrently; std's reads take the same lock as `set_var`.
+    ONCE.call_once(|| unsafe { std::env::set_var("CTLGRAPH_CACHE_DIR", cache()) });
+}
+
+/// The graph `text` (at `file`) stepped by both back-ends.
+fn steppers(file: &Path, text: &str) -> (Stepper, Stepper) {
+    cache_in_process();
+    let compile = || ctlgraph::compile_str(text, file.to_str().unwrap(), &[]).unwrap();
+    let (runner, note) = Runner::choose(Accelerate::Require, &compile(), file, text).unwrap();
+    assert!(note.is_none() && runner.cost().is_some());
+    let fast = Stepper::new(&runner, compile(), &[], None).unwrap();
+    let slow = Stepper::new(&Runner::Interpreted, compile(), &[], None).unwrap();
+    assert!(fast.accelerated() && !slow.accelerated());
+    (fast, slow)
+}
+
+/// Every recorded signal and output of both, equal to the bit.
+fn same_signals(fast: &mut Stepper, slow: &mut Stepper, at: &str) {
+    let names: Vec<String> = slow.model().columns.iter().map(|c| c.name.clone()).collect();
+    let outputs: Vec<String> = slow.model().output_names().map(str::to_string).collect();
+    for name in names.iter().chain(&outputs) {
+        let (a, b) = (fast.signal(name).unwrap().to_vec(), slow.signal(name).unwrap().to_vec());
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&a), bits(&b), "{at}: `{name}` accelerated {a:?}, interpreted {b:?}");
+    }
+    assert_eq!(fast.time().to_bits(), slow.time().to_bits(), "{at}");
+}
+
+/// A host's session: inputs set between steps, a snapshot taken halfway
+/// and restored at the end, the second half stepped again.
+fn host_session(graph: &str, text: &str, input: &str, width: usize, dt: f64, steps: usize) {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join(graph);
+    std::fs::write(&file, text).unwrap();
+    let (mut fast, mut slow) = steppers(&file, text);
+    let mut saved = None;
+    let mut second_half = Vec::new();
+    for k in 1..=steps {
+        let value: Vec<f64> = (0..width).map(|i| (0.37 * k as f64 + i as f64).sin()).collect();
+        for s in [&mut fast, &mut slow] {
+            s.set_input(input, &value).unwrap();
+        }
+        same_signals(&mut fast, &mut slow, &format!("{graph}: input set at step {k}"));
+        for s in [&mut fast, &mut slow] {
+            s.advance_to(k as f64 * dt).unwrap();
+        }
+        same_signals(&mut fast, &mut slow, &format!("{graph}: t = {}", k as f64 * dt));
+        if k == steps / 2 {
+            saved = Some((fast.state().unwrap(), slow.state().unwrap()));
+        }
+        if k > steps / 2 {
+            second_half.push(fast.output(slow.model().output_names().next().unwrap()).unwrap().to_vec());
+        }
+    }
+    let (fast_saved, slow_saved) = saved.unwrap();
+    fast.restore(&fast_saved).unwrap();
+    slow.restore(&slow_saved).unwrap();
+    assert_eq!(fast.time(), (steps / 2) as f64 * dt);
+    let output = slow.model().output_names().next().unwrap().to_string();
+    for (k, before) in (steps / 2 + 1..=steps).zip(&second_half) {
+        let value: Vec<f64> = (0..width).map(|i| (0.37 * k as f64 + i as f64).sin()).collect();
+        fast.set_input(input, &value).unwrap();
+        fast.advance_to(k as f64 * dt).unwrap();
+        assert_eq!(fast.output(&output).unwrap(), &before[..], "{graph}: restored, step {k}");
+    }
+    // A snapshot of one back-end is not the other's, and mistakes are named alike.
+    assert!(fast.restore(&slow_saved).unwrap_err().to_string().contains("another run"));
+    let (a, b) = (fast.set_input("nope", &[1.0]).unwrap_err(), slow.set_input("nope", &[1.0]).unwrap_err());
+    assert_eq!(a.to_string(), b.to_string());
+    assert!(fast.advance_to(0.0).is_err() && slow.advance_to(0.0).is_err());
+}
+
+#[test]
+fn accelerated_stepping_is_the_interpreters_bit_for_bit() {
+    let read = |p: &str| std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(p)).unwrap();
+    // Adaptive (dopri5) with an input in a nonlinear equation; a vector input.
+    host_session("van_der_pol.yaml", &read("graphs/fmu/van_der_pol.yaml"), "u", 1, 0.05, 60);
+    host_session("plant_io.yaml", &read("tests/fmu/plant_io.yaml"), "u", 2, 0.01, 60);
+    // An input into a transport delay (history and its left limits, which
+    // setting an input hands over) under an adaptive method, off its grid.
+    let delayed = "simulation: { stop: 1, solver: { method: dopri5, rtol: 1.0e-9 } }\n\
+                   blocks:\n  u: { type: inport }\n  d: { type: transport_delay, delay: 0.013 }\n  \
+                   x: { type: integrator }\n  y: { type: outport }\n\
+                   wires: [u -> d, d -> x, x -> y]\nrecord: [d, x]\n";
+    host_session("delayed.yaml", delayed, "u", 1, 0.0071, 90);
 }

@@ -2,10 +2,10 @@
 //! drives compiled graphs step by step, at Rust speed, with numpy arrays
 //! back. The package `ctlgraph` (ctlgraph/__init__.py) re-exports it.
 
-use ctlgraph::accel::Runner;
+use ctlgraph::accel::{Runner, Stepper, StepperSnapshot};
 use ctlgraph::core::checks::CheckResult;
 use ctlgraph::core::trace::Trace;
-use ctlgraph::core::{Diagnostic, Model, Simulator, Snapshot as CoreSnapshot};
+use ctlgraph::core::{Diagnostic, Model};
 use numpy::{PyArray1, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyKeyError, PyValueError};
@@ -278,13 +278,13 @@ fn blocks_of(py: Python<'_>, model: &Model) -> PyResult<Py<PyList>> {
 /// `outport` blocks; both are scalars (float) or vectors (numpy array).
 #[pyclass(frozen, name = "Model", module = "ctlgraph")]
 struct LoadedModel {
-    sim: Mutex<Simulator>,
+    sim: Mutex<Stepper>,
 }
 
 /// A saved instant of a run, for `LoadedModel.restore`.
 #[pyclass(frozen, module = "ctlgraph")]
 struct Snapshot {
-    inner: Mutex<CoreSnapshot>,
+    inner: Mutex<StepperSnapshot>,
     time: f64,
 }
 
@@ -308,7 +308,7 @@ fn value(py: Python<'_>, v: &[f64]) -> PyResult<Py<PyAny>> {
 impl LoadedModel {
     /// The simulator (a call that panicked left it usable: the lock is
     /// taken back).
-    fn sim(&self) -> MutexGuard<'_, Simulator> {
+    fn sim(&self) -> MutexGuard<'_, Stepper> {
         self.sim.lock().unwrap_or_else(|e| e.into_inner())
     }
 }
@@ -324,13 +324,13 @@ impl LoadedModel {
     /// The graph's inputs (top-level inport blocks).
     #[getter]
     fn inputs(&self) -> Vec<String> {
-        self.sim().input_names().map(str::to_string).collect()
+        self.sim().model().input_names().map(str::to_string).collect()
     }
 
     /// The graph's outputs (top-level outport blocks).
     #[getter]
     fn outputs(&self) -> Vec<String> {
-        self.sim().output_names().map(str::to_string).collect()
+        self.sim().model().output_names().map(str::to_string).collect()
     }
 
     /// Sets input `name` to `value` (a float, or a sequence for a vector
@@ -377,7 +377,7 @@ impl LoadedModel {
     fn signals(&self) -> Vec<String> {
         let sim = self.sim();
         let mut names: Vec<String> = sim.model().columns.iter().map(|c| c.name.clone()).collect();
-        for output in sim.output_names() {
+        for output in sim.model().output_names() {
             if !names.iter().any(|n| n == output) {
                 names.push(output.to_string());
             }
@@ -386,9 +386,17 @@ impl LoadedModel {
     }
 
     /// The run as it stands: states, block memory, solver.
-    fn state(&self) -> Snapshot {
+    fn state(&self, py: Python<'_>) -> PyResult<Snapshot> {
         let sim = self.sim();
-        Snapshot { inner: Mutex::new(sim.state()), time: sim.time() }
+        let saved = sim.state().map_err(|d| graph_error(py, &d))?;
+        Ok(Snapshot { time: saved.time(), inner: Mutex::new(saved) })
+    }
+
+    /// Whether the steps run in the graph's generated step library
+    /// (`load(…, accelerate=True)`) rather than the interpreter.
+    #[getter]
+    fn accelerated(&self) -> bool {
+        self.sim().accelerated()
     }
 
     /// Returns the run to `snapshot` (taken of this model).
@@ -398,18 +406,31 @@ impl LoadedModel {
     }
 
     fn __repr__(&self) -> String {
-        format!("Model(t = {}, inputs {:?}, outputs {:?})", self.time(), self.inputs(), self.outputs())
+        let how = if self.accelerated() { ", accelerated" } else { "" };
+        format!("Model(t = {}, inputs {:?}, outputs {:?}{how})", self.time(), self.inputs(), self.outputs())
     }
 }
 
 /// Compiles the graph file `path` for stepping; see `LoadedModel`.
-/// `set` and `seed` as for `run`. Raises GraphError.
+/// `set` and `seed` as for `run`; `accelerate` (True, False or
+/// "require"; default: the graph's `simulation.accelerate`) steps the
+/// graph's generated step library, with the interpreter's numbers to the
+/// bit. Raises GraphError.
 #[pyfunction]
-#[pyo3(signature = (path, set = None, seed = None))]
-fn load(py: Python<'_>, path: PathBuf, set: Option<&Bound<'_, PyDict>>, seed: Option<u64>) -> PyResult<LoadedModel> {
+#[pyo3(signature = (path, set = None, seed = None, accelerate = None))]
+fn load(
+    py: Python<'_>,
+    path: PathBuf,
+    set: Option<&Bound<'_, PyDict>>,
+    seed: Option<u64>,
+    accelerate: Option<&Bound<'_, PyAny>>,
+) -> PyResult<LoadedModel> {
     let sets = overrides(set)?;
+    let accelerate = accelerate_arg(accelerate)?;
     let model = py.detach(|| GRAPHS.compile(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
-    Ok(LoadedModel { sim: Mutex::new(Simulator::new(model, None)) })
+    let runner = runner(py, accelerate, &model, &path)?;
+    let stepper = py.detach(|| Stepper::new(&runner, model, &sets, seed)).map_err(SimulationError::new_err)?;
+    Ok(LoadedModel { sim: Mutex::new(stepper) })
 }
 
 /// The linear model of a graph around an operating point, as

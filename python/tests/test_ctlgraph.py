@@ -152,6 +152,39 @@ def test_inputs_outputs_and_snapshots():
         model.advance_to(0.1)
 
 
+def test_an_accelerated_model_steps_as_the_interpreted_one(monkeypatch):
+    # The cache the Rust tests fill (tests/accelerate.rs).
+    monkeypatch.setenv("CTLGRAPH_CACHE_DIR", str(ROOT / "target" / "tmp" / "accelerate-cache"))
+    name = graph("tutorial/controller_io.yaml")
+    slow, fast = ctlgraph.load(name, set={"kp": 3}), ctlgraph.load(name, set={"kp": 3}, accelerate="require")
+    assert fast.accelerated and not slow.accelerated and "accelerated" in repr(fast)
+    assert fast.inputs == slow.inputs and fast.signals() == slow.signals()
+    saved = None
+    for k in range(1, 401):
+        # A host's loop: measure, read the command at that instant, step on.
+        for model in (slow, fast):
+            model.set_input("y", 0.8 * np.sin(0.01 * k))
+        assert fast.output("u") == slow.output("u"), k
+        for model in (slow, fast):
+            model.advance_to(k * 1e-3)
+        assert fast.signal("e") == slow.signal("e") and fast.time == slow.time, k
+        if k == 200:
+            saved = fast.state()
+    last = fast.output("u")
+    fast.restore(saved)
+    assert fast.time == saved.time == pytest.approx(0.2)
+    for k in range(201, 401):
+        fast.set_input("y", 0.8 * np.sin(0.01 * k))
+        fast.advance_to(k * 1e-3)
+    assert fast.output("u") == last
+    with pytest.raises(ctlgraph.GraphError, match="did you mean `y`"):
+        fast.set_input("yy", 1.0)
+    with pytest.raises(ctlgraph.GraphError, match="another run"):
+        fast.restore(slow.state())
+    with pytest.raises(ctlgraph.SimulationError, match="cannot advance"):
+        fast.advance_to(0.1)
+
+
 def test_to_pandas():
     pandas = pytest.importorskip("pandas")
     frame = ctlgraph.run(graph("tutorial/pid_loop.yaml")).to_pandas()

@@ -81,6 +81,35 @@ pub struct AcceleratedRun {
     run: *mut c_void,
 }
 
+// SAFETY: the run is a boxed `Compiled` in the library, which owns its
+// values (blocks are `Send`) and is reached only through `&mut self` or
+// `&self` calls that do not share it between threads at once.
+unsafe impl Send for AcceleratedRun {}
+
+/// An accelerated run at one instant ([`AcceleratedRun::state`]).
+pub struct AcceleratedSnapshot {
+    lib: Arc<Library>,
+    snapshot: *mut c_void,
+    time: f64,
+}
+
+// SAFETY: as for `AcceleratedRun`: a boxed clone of a run, owned here.
+unsafe impl Send for AcceleratedSnapshot {}
+
+impl AcceleratedSnapshot {
+    /// The time it was taken at.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+}
+
+impl Drop for AcceleratedSnapshot {
+    fn drop(&mut self) {
+        // SAFETY: `snapshot` came from this library's `save` and is dropped once.
+        unsafe { (self.lib.api.drop_snapshot)(self.snapshot) }
+    }
+}
+
 impl Drop for AcceleratedRun {
     fn drop(&mut self) {
         // SAFETY: `run` came from this library's `create` and is destroyed once.
@@ -117,6 +146,64 @@ impl AcceleratedRun {
         // SAFETY: `run` is live; `sink` outlives the call.
         unsafe { (self.lib.api.warnings)(self.run, &sink) };
         list
+    }
+
+    /// Sets input block `block` (found and checked by
+    /// [`ctlgraph_core::Model::host_input`]) from now on, as
+    /// [`ctlgraph_core::Simulator::set_input`].
+    pub fn set_input(&mut self, block: usize, value: &[f64]) -> Result<(), String> {
+        let mut message = String::new();
+        let error = text_sink(&mut message);
+        // SAFETY: `run` is live; `value` and `error` outlive the call.
+        let answer = unsafe { (self.lib.api.set_input)(self.run, block, value.as_ptr(), value.len(), &error) };
+        if answer == export::DONE { Ok(()) } else { Err(message) }
+    }
+
+    /// [`ctlgraph_core::Simulator::advance_to`], in the library.
+    pub fn advance_to(&mut self, t: f64) -> Result<(), SimError> {
+        let mut message = String::new();
+        let error = text_sink(&mut message);
+        // SAFETY: `run` is live; `error` outlives the call.
+        let answer = unsafe { (self.lib.api.advance_to)(self.run, t, &error) };
+        if answer == export::DONE { Ok(()) } else { Err(SimError::Reported(message)) }
+    }
+
+    /// [`ctlgraph_core::Simulator::signals_now`], in the library.
+    pub fn signals_now(&mut self) -> Result<&[f64], SimError> {
+        let mut message = String::new();
+        let error = text_sink(&mut message);
+        let mut len = 0;
+        // SAFETY: `run` is live; `len` and `error` outlive the call.
+        let signals = unsafe { (self.lib.api.signals_now)(self.run, &mut len, &error) };
+        if signals.is_null() {
+            return Err(SimError::Reported(message));
+        }
+        // SAFETY: the run's signal buffer, `len` values, unchanged until
+        // the run is next called (which borrowing `self` prevents).
+        Ok(unsafe { std::slice::from_raw_parts(signals, len) })
+    }
+
+    /// The run as it stands, to return to with [`AcceleratedRun::restore`].
+    pub fn state(&self) -> Result<AcceleratedSnapshot, String> {
+        // SAFETY: `run` is live.
+        let snapshot = unsafe { (self.lib.api.save)(self.run) };
+        if snapshot.is_null() {
+            return Err("the accelerated run could not be saved".to_string());
+        }
+        Ok(AcceleratedSnapshot { lib: Arc::clone(&self.lib), snapshot, time: self.time() })
+    }
+
+    /// Returns the run to `snapshot`, taken of this run.
+    pub fn restore(&mut self, snapshot: &AcceleratedSnapshot) -> Result<(), String> {
+        if !Arc::ptr_eq(&self.lib, &snapshot.lib) {
+            return Err("the snapshot was taken of another run".to_string());
+        }
+        let mut message = String::new();
+        let error = text_sink(&mut message);
+        // SAFETY: `run` is live; `snapshot` came from the same library's
+        // `save`; `error` outlives the call.
+        let answer = unsafe { (self.lib.api.restore)(self.run, snapshot.snapshot, &error) };
+        if answer == export::DONE { Ok(()) } else { Err(message) }
     }
 
     /// [`ctlgraph_core::Simulator::run_while`], in the library. A panic in

@@ -12,15 +12,17 @@
 //! makes that an error.
 
 mod library;
+mod stepper;
 
 use crate::toolchain;
 pub use ctlgraph_core::Accelerate;
 use ctlgraph_core::trace::{Trace, record};
 use ctlgraph_core::{Model, RunStats, SimError};
-pub use library::{AcceleratedRun, Library};
+pub use library::{AcceleratedRun, AcceleratedSnapshot, Library};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
+pub use stepper::{Stepper, StepperSnapshot};
 
 /// What making a library ready cost: a build (cold cache) or only a load.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -9,11 +9,12 @@ use crate::sim::events::{Crossings, Watch};
 use crate::sim::output::{Dense, RowSystem};
 use crate::sim::{self, Blame, Clockwork, RunStats, SimError, Sweeps, driver};
 use ctlgraph_solver::{OdeSystem, Zoh, ZohSingleInput};
+use std::sync::Arc;
 
 /// What `ctlgraph codegen` writes for a graph: its sweeps unrolled over
 /// the graph's blocks. Implemented by generated code only; the methods are
 /// the simulator's steps (see [`crate::block`]), called by [`Compiled`].
-pub trait GeneratedStep: Sized {
+pub trait GeneratedStep: Sized + Clone {
     /// The structure the code was generated for ([`super::fingerprint`]).
     const FINGERPRINT: u64;
     /// Whether a block keeps its input's past ([`crate::Block::keeps_history`]).
@@ -65,6 +66,9 @@ pub trait GeneratedStep: Sized {
     /// Block `block`'s next event after `t` ([`crate::Block::next_event`]),
     /// to name the block that holds time when a run stalls.
     fn block_event(&self, block: usize, t: f64) -> f64;
+    /// The value a host sets of block `block`, when it is a top-level
+    /// inport ([`crate::Block::external_input`]).
+    fn external_input(&mut self, block: usize) -> Option<&mut [f64]>;
 }
 
 /// The kernel of the model's block `index`, for generated code reading
@@ -125,7 +129,8 @@ pub fn zeros<const N: usize>() -> Box<[f64; N]> {
 /// A run of a generated step `G`: like [`crate::Simulator`] for the
 /// graphs [`super::generate`] accepts, with the same results. Its time
 /// keeping is the driver's ([`crate::sim::Sweeps`]); the generated step
-/// provides the sweeps.
+/// provides the sweeps. A clone is a snapshot ([`Compiled::state`]).
+#[derive(Clone)]
 pub struct Compiled<G: GeneratedStep> {
     step: G,
     x: Vec<f64>,
@@ -136,10 +141,30 @@ pub struct Compiled<G: GeneratedStep> {
     dense: Option<Dense>,
     /// Whether every signal was finite after the last output sweep.
     all_finite: bool,
+    /// Which run this is (a snapshot is restored only into its own).
+    owner: u64,
     /// For naming a block in an error.
+    names: Arc<Names>,
+}
+
+/// What a run keeps of its model to name a block in an error and to
+/// check a host's input: shared by the run and its snapshots.
+struct Names {
     meta: Vec<BlockMeta>,
     in_ports: Vec<Port>,
     out_ports: Vec<Port>,
+    /// The top-level inports (block index) and their widths.
+    inputs: Vec<(usize, usize)>,
+}
+
+/// A generated run at one instant, to return to with [`Compiled::restore`].
+pub struct CompiledSnapshot<G: GeneratedStep>(Compiled<G>);
+
+impl<G: GeneratedStep> CompiledSnapshot<G> {
+    /// The time it was taken at.
+    pub fn time(&self) -> f64 {
+        self.0.time()
+    }
 }
 
 /// The solver stage the integrator sees.
@@ -204,9 +229,17 @@ impl<G: GeneratedStep> Compiled<G> {
             watch: Watch::new(model, model.sim.zero_crossing),
             dense: Dense::new(model.sim.output, model.n_states, model.between.n_integrated, held_transitions(model)?),
             all_finite: true,
-            meta: model.meta.clone(),
-            in_ports: model.in_ports.clone(),
-            out_ports: model.out_ports.clone(),
+            owner: sim::next_run_id(),
+            names: Arc::new(Names {
+                meta: model.meta.clone(),
+                in_ports: model.in_ports.clone(),
+                out_ports: model.out_ports.clone(),
+                inputs: model
+                    .external_inputs
+                    .iter()
+                    .map(|&(_, b)| (b, model.out_ports[model.slots[b].outputs.start].width))
+                    .collect(),
+            }),
         };
         run.reset();
         Ok(run)
@@ -282,9 +315,52 @@ impl<G: GeneratedStep> Compiled<G> {
         driver::run_while(self, sink)
     }
 
+    /// Sets the value of input block `block` (a top-level inport, index
+    /// into the model's blocks) from now on, as [`crate::Simulator::set_input`]
+    /// does by name ([`crate::Model::host_input`] finds the block and
+    /// checks the value). `Err` when `block` is no input of that width.
+    pub fn set_input(&mut self, block: usize, value: &[f64]) -> Result<(), String> {
+        match self.names.inputs.iter().find(|&&(b, _)| b == block) {
+            Some(&(_, width)) if width == value.len() && value.iter().all(|v| v.is_finite()) => {
+                crate::sim::host::set_input(self, block, value);
+                Ok(())
+            }
+            _ => Err(format!("block {block} is no input taking {} finite value(s)", value.len())),
+        }
+    }
+
+    /// Simulates up to time `t` and stops exactly there, as
+    /// [`crate::Simulator::advance_to`].
+    pub fn advance_to(&mut self, t: f64) -> Result<(), SimError> {
+        crate::sim::host::advance_to(self, t)
+    }
+
+    /// The signal buffer at the present time, outputs computed if they are
+    /// not, as [`crate::Simulator::signals_now`].
+    pub fn signals_now(&mut self) -> Result<&[f64], SimError> {
+        crate::sim::host::refresh(self)?;
+        Ok(self.step.signals())
+    }
+
+    /// The run as it stands, to return to later: every block's memory, the
+    /// solver's history, the clocks.
+    pub fn state(&self) -> CompiledSnapshot<G> {
+        CompiledSnapshot(self.clone())
+    }
+
+    /// Returns the run to `snapshot`, taken of this run.
+    pub fn restore(&mut self, snapshot: &CompiledSnapshot<G>) -> Result<(), String> {
+        if snapshot.0.owner != self.owner {
+            return Err("the snapshot was taken of another run".to_string());
+        }
+        self.clone_from(&snapshot.0);
+        Ok(())
+    }
+
     /// What names a block in this run's errors.
     fn blame(&self) -> Blame<'_> {
-        Blame { meta: &self.meta, in_ports: &self.in_ports, out_ports: &self.out_ports }
+        let n = &*self.names;
+        Blame { meta: &n.meta, in_ports: &n.in_ports, out_ports: &n.out_ports }
     }
 }
 
@@ -326,7 +402,7 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
     /// (then the whole buffer is checked again at every step).
     fn output_sweep(&mut self) -> Result<(), SimError> {
         let c = &self.clockwork;
-        let all = c.first || c.at_event;
+        let all = c.first || c.at_event || c.inputs_changed;
         let mut wrote_finite = self.step.outputs(c.t, &self.x, c.first, all, &c.hit);
         if !self.watch.blocks.is_empty() {
             if self.step.major_step_events(c.t, &mut self.x) {
@@ -343,6 +419,10 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
             }
         }
         Ok(())
+    }
+
+    fn external_input(&mut self, block: usize) -> Option<&mut [f64]> {
+        self.step.external_input(block)
     }
 
     fn update_sweep(&mut self) {
@@ -384,7 +464,7 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
         for (b, _, k) in self.watch.fired() {
             self.step.crossing_located(b, k);
         }
-        if let Some((b, _)) = self.watch.count_event(t, &self.meta)? {
+        if let Some((b, _)) = self.watch.count_event(t, &self.names.meta)? {
             self.step.freeze(b, false);
         }
         Ok(Some(t))
@@ -407,7 +487,7 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
     }
 
     fn names(&self) -> &[BlockMeta] {
-        &self.meta
+        &self.names.meta
     }
 
     fn blame_states(&self) -> SimError {

@@ -91,7 +91,7 @@ impl<'m> Gen<'m> {
 
     fn step_type(&self, out: &mut String) {
         let m = self.model;
-        out.push_str("/// The graph's blocks, signals and held transitions.\npub struct Step {\n");
+        out.push_str("/// The graph's blocks, signals and held transitions.\n#[derive(Clone)]\npub struct Step {\n");
         let _ = writeln!(out, "    s: Box<[f64; {}]>,", m.signal_len);
         if self.n_constants > 0 {
             let _ = writeln!(out, "    /// The kernels' constants.\n    k: [f64; {}],", self.n_constants);
@@ -507,7 +507,14 @@ impl<'m> Gen<'m> {
         for v in &self.visits {
             let _ = writeln!(out, "            {} => self.b{}.next_event(t),", v.index, v.index);
         }
-        out.push_str("            _ => f64::INFINITY,\n        }\n    }\n");
+        out.push_str("            _ => f64::INFINITY,\n        }\n    }\n\n");
+        out.push_str("    fn external_input(&mut self, block: usize) -> Option<&mut [f64]> {\n        match block {\n");
+        for &(_, i) in &self.model.external_inputs {
+            if self.visits.iter().any(|v| v.index == i) {
+                let _ = writeln!(out, "            {i} => self.b{i}.external_input(),");
+            }
+        }
+        out.push_str("            _ => None,\n        }\n    }\n");
     }
 }
 

@@ -16,14 +16,14 @@
 //! an error; the program's sink is called inside the run and must not
 //! unwind (the loader catches its own).
 
-use super::{Compiled, GeneratedStep};
+use super::{Compiled, CompiledSnapshot, GeneratedStep};
 use crate::registry::Registry;
 use crate::sim::RunStats;
 use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 /// Bumped whenever [`Api`] or the structs it passes change.
-pub const ABI_VERSION: u32 = 4;
+pub const ABI_VERSION: u32 = 5;
 
 /// The exported function returning the library's [`Api`].
 pub const SYMBOL: &[u8] = b"ctlgraph_accelerated_v1";
@@ -93,6 +93,8 @@ pub const FINISHED: i32 = 1;
 pub const CUT: i32 = 0;
 /// [`RunWhile`]'s answer (and [`Create`]'s null): see the message.
 pub const FAILED: i32 = -1;
+/// A host call's answer ([`SetInput`], [`AdvanceTo`], [`Restore`]): done.
+pub const DONE: i32 = 0;
 
 /// Loads, compiles and prepares a run; null (and a message) when it cannot.
 pub type Create = unsafe extern "C" fn(spec: *const Spec, error: *const TextSink) -> *mut c_void;
@@ -106,6 +108,20 @@ pub type Time = unsafe extern "C" fn(run: *const c_void) -> f64;
 pub type GetStats = unsafe extern "C" fn(run: *const c_void) -> RunStats;
 /// [`crate::Simulator::warnings`]: `sink` receives each, one call apiece.
 pub type Warnings = unsafe extern "C" fn(run: *const c_void, sink: *const TextSink);
+/// [`super::Compiled::set_input`]: `len` values for input block `block`;
+/// [`DONE`] or [`FAILED`].
+pub type SetInput =
+    unsafe extern "C" fn(run: *mut c_void, block: usize, values: *const f64, len: usize, error: *const TextSink) -> i32;
+/// [`super::Compiled::advance_to`]: [`DONE`] or [`FAILED`].
+pub type AdvanceTo = unsafe extern "C" fn(run: *mut c_void, t: f64, error: *const TextSink) -> i32;
+/// [`super::Compiled::signals_now`]: the buffer (valid until the run is
+/// next called) and its length in `len`; null when the outputs failed.
+pub type SignalsNow = unsafe extern "C" fn(run: *mut c_void, len: *mut usize, error: *const TextSink) -> *const f64;
+/// [`super::Compiled::state`]: a snapshot, freed by [`DropSnapshot`].
+pub type Save = unsafe extern "C" fn(run: *const c_void) -> *mut c_void;
+/// [`super::Compiled::restore`]: [`DONE`] or [`FAILED`].
+pub type Restore = unsafe extern "C" fn(run: *mut c_void, snapshot: *const c_void, error: *const TextSink) -> i32;
+pub type DropSnapshot = unsafe extern "C" fn(snapshot: *mut c_void);
 
 /// Everything a library offers, behind [`SYMBOL`].
 #[repr(C)]
@@ -120,6 +136,12 @@ pub struct Api {
     pub time: Time,
     pub stats: GetStats,
     pub warnings: Warnings,
+    pub set_input: SetInput,
+    pub advance_to: AdvanceTo,
+    pub signals_now: SignalsNow,
+    pub save: Save,
+    pub restore: Restore,
+    pub drop_snapshot: DropSnapshot,
 }
 
 /// A generated step made into a library: its graphs are compiled with
@@ -141,6 +163,12 @@ impl Api {
             time: time::<G>,
             stats: stats::<G>,
             warnings: warnings::<G>,
+            set_input: set_input::<G>,
+            advance_to: advance_to::<G>,
+            signals_now: signals_now::<G>,
+            save: save::<G>,
+            restore: restore::<G>,
+            drop_snapshot: drop_snapshot::<G>,
         }
     }
 }
@@ -274,5 +302,75 @@ unsafe extern "C" fn warnings<G: Exported>(run: *const c_void, sink: *const Text
     let (run, sink) = unsafe { (&*run.cast::<Compiled<G>>(), &*sink) };
     for w in run.warnings() {
         sink.send(w);
+    }
+}
+
+/// `work`'s answer for a host call: [`DONE`], or [`FAILED`] with its
+/// message (or a panic's) sent to `error`.
+fn host_call<E: std::fmt::Display>(error: &TextSink, work: impl FnOnce() -> Result<(), E>) -> i32 {
+    match catch_unwind(AssertUnwindSafe(work)) {
+        Ok(Ok(())) => DONE,
+        Ok(Err(e)) => {
+            error.send(&e.to_string());
+            FAILED
+        }
+        Err(payload) => {
+            error.send(&panic_text(payload));
+            FAILED
+        }
+    }
+}
+
+unsafe extern "C" fn set_input<G: Exported>(
+    run: *mut c_void,
+    block: usize,
+    values: *const f64,
+    len: usize,
+    error: *const TextSink,
+) -> i32 {
+    // SAFETY: `run` came from `create::<G>`; `values` holds `len` numbers
+    // and `error` is valid, for the call.
+    let (run, error) = unsafe { (&mut *run.cast::<Compiled<G>>(), &*error) };
+    let values = if len == 0 { &[][..] } else { unsafe { std::slice::from_raw_parts(values, len) } };
+    host_call(error, || run.set_input(block, values))
+}
+
+unsafe extern "C" fn advance_to<G: Exported>(run: *mut c_void, t: f64, error: *const TextSink) -> i32 {
+    // SAFETY: `run` came from `create::<G>`; `error` is valid for the call.
+    let (run, error) = unsafe { (&mut *run.cast::<Compiled<G>>(), &*error) };
+    host_call(error, || run.advance_to(t))
+}
+
+unsafe extern "C" fn signals_now<G: Exported>(run: *mut c_void, len: *mut usize, error: *const TextSink) -> *const f64 {
+    // SAFETY: `run` came from `create::<G>`; `len` and `error` are valid for the call.
+    let (run, error) = unsafe { (&mut *run.cast::<Compiled<G>>(), &*error) };
+    let mut found = (std::ptr::null(), 0);
+    let answer = host_call(error, || run.signals_now().map(|signals| found = (signals.as_ptr(), signals.len())));
+    // SAFETY: as above.
+    unsafe { *len = found.1 };
+    if answer == DONE { found.0 } else { std::ptr::null() }
+}
+
+unsafe extern "C" fn save<G: Exported>(run: *const c_void) -> *mut c_void {
+    // SAFETY: `run` came from `create::<G>`.
+    let run = unsafe { &*run.cast::<Compiled<G>>() };
+    // Cloning blocks is plain code that does not panic; were one to, there
+    // is no snapshot.
+    catch_unwind(AssertUnwindSafe(|| Box::into_raw(Box::new(run.state())).cast())).unwrap_or(std::ptr::null_mut())
+}
+
+unsafe extern "C" fn restore<G: Exported>(run: *mut c_void, snapshot: *const c_void, error: *const TextSink) -> i32 {
+    // SAFETY: `run` came from `create::<G>`, `snapshot` from `save::<G>`
+    // (of the same library: the loader keeps them together).
+    let (run, snapshot, error) =
+        unsafe { (&mut *run.cast::<Compiled<G>>(), &*snapshot.cast::<CompiledSnapshot<G>>(), &*error) };
+    host_call(error, || run.restore(snapshot))
+}
+
+unsafe extern "C" fn drop_snapshot<G: Exported>(snapshot: *mut c_void) {
+    if !snapshot.is_null() {
+        // SAFETY: `snapshot` came from `save::<G>` and is dropped once.
+        let _ =
+            catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(snapshot.cast::<CompiledSnapshot<G>>()) })));
     }
 }

@@ -47,6 +47,9 @@ pub(crate) struct Clockwork {
     pub(crate) events_may_change: bool,
     /// Where a host's `advance_to` must land (infinite otherwise).
     pub(crate) pause: f64,
+    /// A host set an input since the last outputs: the next output sweep
+    /// runs every block, as at an event.
+    pub(crate) inputs_changed: bool,
     pub(crate) major_steps: u64,
     /// Major steps in a row at which time did not advance ([`count_stall`]).
     pub(crate) stalled: u32,
@@ -90,6 +93,7 @@ impl Clockwork {
             next_event_generation: 0,
             events_may_change: false,
             pause: f64::INFINITY,
+            inputs_changed: false,
             major_steps: 0,
             stalled: 0,
         }
@@ -177,9 +181,13 @@ pub(crate) trait Sweeps {
     /// initial values (at t = 0).
     fn initialize(&mut self);
     /// Step (1): the blocks' outputs in execution order (each due block
-    /// once, or again after a block reset its states here), then a check
-    /// that every signal is finite.
+    /// once, or again after a block reset its states here; every block at
+    /// the first step, an event or after a host set an input), then a
+    /// check that every signal is finite.
     fn output_sweep(&mut self) -> Result<(), SimError>;
+    /// The value a host sets of block `block`, a top-level inport
+    /// ([`crate::Block::external_input`]).
+    fn external_input(&mut self, block: usize) -> Option<&mut [f64]>;
     /// Step (3): the updates of the blocks due now.
     fn update_sweep(&mut self);
     /// The first block event strictly after the present time, and its
@@ -239,6 +247,7 @@ pub(crate) fn reset(s: &mut impl Sweeps) {
     c.major_steps = 0;
     c.stalled = 0;
     c.events_may_change = false;
+    c.inputs_changed = false;
     c.grid.set_tick(1);
     c.clocks.iter_mut().for_each(|clock| clock.set_tick(0));
     match &mut c.on_grid {
@@ -258,7 +267,9 @@ pub(crate) fn reset(s: &mut impl Sweeps) {
 #[inline]
 pub(crate) fn outputs(s: &mut impl Sweeps) -> Result<(), SimError> {
     let result = s.output_sweep();
-    s.clockwork_mut().first = false;
+    let c = s.clockwork_mut();
+    c.first = false;
+    c.inputs_changed = false;
     result
 }
 

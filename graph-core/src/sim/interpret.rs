@@ -15,7 +15,7 @@ impl Simulator {
     fn sweep(&mut self) {
         let (m, s) = (&*self.model, &mut self.state);
         let c = &s.clockwork;
-        let all = c.first || c.at_event || s.inputs_changed;
+        let all = c.first || c.at_event || c.inputs_changed;
         let order = if all { &self.every } else { &self.regular };
         for integrator in &self.integrands {
             integrator.output(&s.x, &mut s.signals);
@@ -134,7 +134,6 @@ impl Sweeps for Simulator {
             self.sweep();
         }
         let s = &mut self.state;
-        s.inputs_changed = false;
         let (m, t, x, signals, blocks) = (&*self.model, s.clockwork.t, &s.x, &mut s.signals, &s.blocks);
         s.watch.record_signs(|_, i, g| {
             blocks[i].zero_crossings(&io_for(&m.slots[i], t, false, x, signals, &m.in_ports, &m.out_ports), g);
@@ -145,6 +144,10 @@ impl Sweeps for Simulator {
         }
         self.outputs_current = true;
         Ok(())
+    }
+
+    fn external_input(&mut self, block: usize) -> Option<&mut [f64]> {
+        self.state.blocks.get_mut(block)?.external_input()
     }
 
     /// Runs `update` of the blocks that have one (see [`crate::block::Block::updates`])
@@ -191,7 +194,7 @@ impl Sweeps for Simulator {
 
     #[inline(always)]
     fn integrate(&mut self, t0: f64, target: f64) -> Result<f64, SimError> {
-        let current = std::mem::take(&mut self.outputs_current) && !self.state.inputs_changed;
+        let current = std::mem::take(&mut self.outputs_current) && !self.state.clockwork.inputs_changed;
         let (mut sys, clockwork, x, _) = self.minor_system(target, current);
         match clockwork.integ.advance(&mut sys, t0, target, &mut x[..clockwork.n_integrated]) {
             Ok(t) => Ok(t),

@@ -16,7 +16,7 @@ pub(crate) mod clock;
 pub(crate) mod driver;
 mod error;
 pub(crate) mod events;
-mod host;
+pub(crate) mod host;
 mod interpret;
 mod minor;
 pub(crate) mod output;
@@ -64,6 +64,11 @@ pub fn expected_major_steps(model: &Model, stop: Option<f64>) -> f64 {
 
 /// Numbers run states, so a snapshot is restored only where it was taken.
 static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// A number no other run of this process has ([`NEXT_ID`]).
+pub(crate) fn next_run_id() -> u64 {
+    NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+}
 
 /// A model being simulated: the compiled model (shared), the plan this
 /// simulator derives from it once (which blocks each sweep visits), the

@@ -10,7 +10,6 @@
 //! for most; lookup tables and fuzzy systems share theirs), and the step
 //! loop calls it through one pointer, as before.
 
-use super::NEXT_ID;
 use super::driver::Clockwork;
 use super::events::Watch;
 use super::output::Dense;
@@ -37,8 +36,6 @@ pub struct RunState {
     /// The held LTI blocks' inputs latched at the last major step (each
     /// block's range in `Simulator::held`).
     pub(super) held_inputs: Vec<f64>,
-    /// A host set an input since the last outputs.
-    pub(super) inputs_changed: bool,
     /// Rows between major steps, when `simulation.output` asks for them.
     pub(super) dense: Option<Dense>,
 }
@@ -70,14 +67,13 @@ impl RunState {
     /// A run of `model` to `stop`, before its initial states are computed.
     pub(super) fn new(model: &Model, clockwork: Clockwork, watch: Watch) -> Self {
         RunState {
-            owner: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            owner: super::next_run_id(),
             clockwork,
             signals: vec![0.0; model.signal_len],
             x: vec![0.0; model.n_states],
             blocks: model.blocks.iter().map(|b| RunBlock { block: b.clone(), frozen: false }).collect(),
             watch,
             held_inputs: Vec::new(),
-            inputs_changed: false,
             dense: None,
         }
     }
