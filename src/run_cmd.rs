@@ -5,7 +5,7 @@
 
 use crate::interrupt;
 use crate::progress::Progress;
-use ctlgraph::accel::{Accelerate, AcceleratedRun, Cost};
+use ctlgraph::accel::{Accelerate, AcceleratedRun, Cost, ROWS_PER_BATCH};
 use ctlgraph::html::Report;
 use ctlgraph::record::{CsvFile, Number, Recorder, Trace, write_atomic};
 use ctlgraph::report::{RunInfo, to_json};
@@ -169,10 +169,35 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
         cut.is_none()
     };
     let result = match engine.accelerated.as_mut() {
-        Some(run) => run.run_while(&mut sink),
-        None => sim.run_while(&mut sink),
+        // The library records the rows itself and hands them over in
+        // batches; interrupts, the wall budget and progress are looked at
+        // per batch, the step budget in the library.
+        Some(run) => {
+            let result = run.run_rows(max_steps, ROWS_PER_BATCH, &mut |rows, width| {
+                for row in rows.chunks_exact(width) {
+                    emit(row);
+                }
+                last_step = rows.get(rows.len().saturating_sub(width)).copied().unwrap_or(last_step);
+                progress.tick(last_step);
+                if start.elapsed().as_secs_f64() > max_wall {
+                    cut = Some(Cut::MaxWall(max_wall));
+                }
+                if interrupted.load(std::sync::atomic::Ordering::Relaxed) {
+                    cut = Some(Cut::Interrupted);
+                }
+                cut.is_none()
+            });
+            if matches!(result, Ok(false)) && cut.is_none() {
+                cut = Some(Cut::MaxSteps(max_steps));
+            }
+            result
+        }
+        None => {
+            let result = sim.run_while(&mut sink);
+            recorder.flush(&mut emit);
+            result
+        }
     };
-    recorder.flush(&mut emit);
     progress.finish();
     let wall = start.elapsed().as_secs_f64();
     let cost = engine.acceleration.as_ref().and_then(|a| a.as_ref().ok().copied());

@@ -250,3 +250,46 @@ fn accelerated_stepping_is_the_interpreters_bit_for_bit() {
                    wires: [u -> d, d -> x, x -> y]\nrecord: [d, x]\n";
     host_session("delayed.yaml", delayed, "u", 1, 0.0071, 90);
 }
+
+#[test]
+fn a_step_budget_cuts_an_accelerated_run_where_it_cuts_the_interpreted_one() {
+    // The library records the rows and counts the steps itself; the cut,
+    // the outputs kept and the message are the interpreter's.
+    let dir = tempfile::tempdir().unwrap();
+    let graph = "graphs/tutorial/controller_io.yaml";
+    let cut = |name: &str, accelerate: &str| {
+        let csv = dir.path().join(name);
+        let out = ctlgraph(
+            &["run", graph, "--max-steps", "1234", "--out", csv.to_str().unwrap(), accelerate],
+            &cache(),
+            None,
+        );
+        (out.status.code(), text(&out.stderr), std::fs::read(csv).unwrap())
+    };
+    let (interpreted, accelerated) = (cut("i.csv", "--accelerate=off"), cut("a.csv", "--accelerate=require"));
+    assert_eq!(interpreted.0, Some(1));
+    assert!(interpreted.1.contains("--max-steps 1234 reached"), "{}", interpreted.1);
+    assert_eq!(interpreted.2.iter().filter(|&&b| b == b'\n').count(), 1 + 1235);
+    assert_eq!(interpreted, accelerated);
+}
+
+#[test]
+fn decimated_rows_end_at_the_stop_time_in_the_library_too() {
+    // `record: { every: 4 }`, stopped between two logged steps: the last
+    // step is a row of its own, recorded in the library as in the program.
+    let dir = tempfile::tempdir().unwrap();
+    let graph = "graphs/mirror-milling/compensation.yaml";
+    let csv = |name: &str, accelerate: &str| {
+        let out = dir.path().join(name);
+        let args = ["run", graph, "--stop-time", "0.0107", "--out", out.to_str().unwrap(), accelerate];
+        let done = ctlgraph(&args, &cache(), None);
+        assert!(done.status.success(), "{}", text(&done.stderr));
+        String::from_utf8(std::fs::read(out).unwrap()).unwrap()
+    };
+    let (interpreted, accelerated) = (csv("i.csv", "--accelerate=off"), csv("a.csv", "--accelerate=require"));
+    assert_eq!(interpreted, accelerated);
+    let times: Vec<&str> = interpreted.lines().skip(1).map(|l| l.split(',').next().unwrap()).collect();
+    assert_eq!(times.first(), Some(&"0"));
+    assert_eq!(times.last(), Some(&"0.0107"));
+    assert_eq!(times.len(), 1 + 22 / 4 + 1, "{times:?}");
+}

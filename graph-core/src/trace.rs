@@ -3,7 +3,7 @@
 //! are drawn from and checks are evaluated on.
 
 use crate::checks::{Check, CheckResult};
-use crate::compile::{Column, Model};
+use crate::compile::Model;
 use crate::sim::{RunStats, SimError, Simulator};
 
 /// Runs a model to its stop time (or `stop`) and returns the recorded
@@ -42,40 +42,74 @@ pub fn record(
 
 /// Turns signal buffers into rows `[t, col1, col2, …]`, every `every`-th
 /// major step plus the last one. Allocates only in `new`.
+#[derive(Clone)]
 pub struct Recorder {
-    columns: Vec<Column>,
+    /// Where each recorded value is in the signal buffer, element by
+    /// element: a row is a gather, with no copy of a run-time length (a
+    /// call to memcpy) per column.
+    gather: Vec<usize>,
     every: usize,
-    count: usize,
+    /// Major steps until the next logged one (a countdown, not a
+    /// division by `every` per step).
+    skip: usize,
     row: Vec<f64>,
     row_written: bool,
 }
 
 impl Recorder {
     pub fn new(model: &Model) -> Self {
-        let width: usize = model.columns.iter().map(|c| c.width).sum();
+        let gather: Vec<usize> = model.columns.iter().flat_map(|c| c.offset..c.offset + c.width).collect();
         Recorder {
-            columns: model.columns.clone(),
             every: model.record_every.max(1),
-            count: 0,
-            row: vec![0.0; 1 + width],
+            skip: 0,
+            row: vec![0.0; 1 + gather.len()],
+            gather,
             row_written: true,
         }
     }
 
+    /// How many values a row has: the time and the recorded columns.
+    pub fn width(&self) -> usize {
+        self.row.len()
+    }
+
     /// Offers the signals of one major step; `out` receives the row when
     /// this step is logged.
-    pub fn sample(&mut self, t: f64, signals: &[f64], out: &mut dyn FnMut(&[f64])) {
-        self.row[0] = t;
-        let mut k = 1;
-        for c in &self.columns {
-            self.row[k..k + c.width].copy_from_slice(&signals[c.offset..c.offset + c.width]);
-            k += c.width;
-        }
-        self.row_written = self.count.is_multiple_of(self.every);
-        if self.row_written {
+    #[inline]
+    pub fn sample(&mut self, t: f64, signals: &[f64], out: &mut impl FnMut(&[f64])) {
+        self.fill(t, signals);
+        if self.due() {
             out(&self.row);
         }
-        self.count += 1;
+    }
+
+    /// [`Recorder::sample`] appending the row to `rows` (rows one after
+    /// another), without staging it: what an accelerated run records.
+    #[inline]
+    pub fn sample_onto(&mut self, t: f64, signals: &[f64], rows: &mut Vec<f64>) {
+        if self.due() {
+            rows.push(t);
+            rows.extend(self.gather.iter().map(|&i| signals[i]));
+        } else {
+            // Kept for `flush`, should this be the last step.
+            self.fill(t, signals);
+        }
+    }
+
+    fn fill(&mut self, t: f64, signals: &[f64]) {
+        self.row[0] = t;
+        for (value, &i) in self.row[1..].iter_mut().zip(&self.gather) {
+            *value = signals[i];
+        }
+    }
+
+    /// Whether this major step is logged (the first, then every
+    /// `every`-th); counts it.
+    #[inline]
+    fn due(&mut self) -> bool {
+        self.row_written = self.skip == 0;
+        self.skip = if self.row_written { self.every - 1 } else { self.skip - 1 };
+        self.row_written
     }
 
     /// Emits the last step if decimation skipped it, so every log ends at
@@ -124,6 +158,14 @@ impl Trace {
     pub fn push(&mut self, row: &[f64]) {
         for (c, v) in self.columns.iter_mut().zip(row) {
             c.push(*v);
+        }
+    }
+
+    /// Appends rows of `width` values laid one after another (a batch
+    /// from an accelerated run), column by column.
+    pub fn push_rows(&mut self, rows: &[f64], width: usize) {
+        for (c, column) in self.columns.iter_mut().enumerate().take(width) {
+            column.extend(rows.iter().skip(c).step_by(width.max(1)));
         }
     }
 

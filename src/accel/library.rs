@@ -217,10 +217,62 @@ impl AcceleratedRun {
         if let Some(payload) = state.panic {
             resume_unwind(payload);
         }
-        match answer {
-            export::FINISHED => Ok(true),
-            export::CUT => Ok(false),
-            _ => Err(SimError::Reported(message)),
+        run_outcome(answer, message)
+    }
+
+    /// Runs to the stop time recording in the library, as
+    /// [`ctlgraph_core::trace::Recorder`] records: `sink` receives the
+    /// rows (`[t, recorded columns…]`, one after another, and their width)
+    /// `batch` rows at a time and the rest at the end, and ends the run by
+    /// answering false; so does reaching `max_steps` major steps and one
+    /// more. Returns whether the stop time was reached. A major step costs
+    /// no call across the library's interface: this is the fast way to run
+    /// it whole.
+    pub fn run_rows(
+        &mut self,
+        max_steps: u64,
+        batch: usize,
+        sink: &mut dyn FnMut(&[f64], usize) -> bool,
+    ) -> Result<bool, SimError> {
+        let mut state = RowsState { sink, panic: None };
+        let mut message = String::new();
+        let error = text_sink(&mut message);
+        // SAFETY: `run` is live; `state` and `error` outlive the call.
+        let answer = unsafe {
+            (self.lib.api.run_rows)(self.run, max_steps, batch, rows, (&raw mut state).cast::<c_void>(), &error)
+        };
+        if let Some(payload) = state.panic {
+            resume_unwind(payload);
+        }
+        run_outcome(answer, message)
+    }
+}
+
+/// What a run in the library answered: whether it reached its stop time.
+fn run_outcome(answer: i32, message: String) -> Result<bool, SimError> {
+    match answer {
+        export::FINISHED => Ok(true),
+        export::CUT => Ok(false),
+        _ => Err(SimError::Reported(message)),
+    }
+}
+
+/// The sink behind [`rows`], and a panic it raised.
+struct RowsState<'a> {
+    sink: &'a mut dyn FnMut(&[f64], usize) -> bool,
+    panic: Option<Box<dyn std::any::Any + Send>>,
+}
+
+unsafe extern "C" fn rows(ctx: *mut c_void, values: *const f64, n: usize, width: usize) -> bool {
+    // SAFETY: `ctx` is the `RowsState` of the `run_rows` call in progress.
+    let state = unsafe { &mut *ctx.cast::<RowsState>() };
+    // SAFETY: the library passes `n` rows of `width` values for the call.
+    let values = if n * width == 0 { &[][..] } else { unsafe { std::slice::from_raw_parts(values, n * width) } };
+    match catch_unwind(AssertUnwindSafe(|| (state.sink)(values, width))) {
+        Ok(go_on) => go_on,
+        Err(payload) => {
+            state.panic = Some(payload);
+            false
         }
     }
 }

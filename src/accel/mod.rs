@@ -16,13 +16,18 @@ mod stepper;
 
 use crate::toolchain;
 pub use ctlgraph_core::Accelerate;
-use ctlgraph_core::trace::{Trace, record};
+use ctlgraph_core::trace::Trace;
 use ctlgraph_core::{Model, RunStats, SimError};
 pub use library::{AcceleratedRun, AcceleratedSnapshot, Library};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 pub use stepper::{Stepper, StepperSnapshot};
+
+/// How many rows an accelerated run hands over at a time
+/// ([`AcceleratedRun::run_rows`]): few enough that a program hears of an
+/// interrupt soon, many enough that the call costs nothing per step.
+pub const ROWS_PER_BATCH: usize = 256;
 
 /// What making a library ready cost: a build (cold cache) or only a load.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -137,8 +142,11 @@ impl Runner {
     ) -> Result<(Trace, RunStats), SimError> {
         match self.start(sets, seed, stop) {
             Ok(Some(mut run)) => {
-                let expected = ctlgraph_core::sim::expected_major_steps(&model, stop);
-                let trace = record(&model, expected, |sink| run.run_while(sink))?;
+                let mut trace = Trace::for_run(&model, ctlgraph_core::sim::expected_major_steps(&model, stop));
+                run.run_rows(u64::MAX, ROWS_PER_BATCH, &mut |rows, width| {
+                    trace.push_rows(rows, width);
+                    true
+                })?;
                 Ok((trace, run.stats()))
             }
             _ => ctlgraph_core::trace::simulate_with_stats(model, stop),

@@ -376,10 +376,12 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
         &mut self.clockwork
     }
 
+    #[inline(always)]
     fn signals(&self) -> &[f64] {
         self.step.signals()
     }
 
+    #[inline(always)]
     fn states(&self) -> &[f64] {
         &self.x
     }
@@ -400,6 +402,13 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
     /// The step checks what it writes; signals it did not write this time
     /// were checked when they were, unless a step found one not finite
     /// (then the whole buffer is checked again at every step).
+    ///
+    /// Never inlined, while the generated sweep is always inlined into it:
+    /// one copy of the graph's code, called from every loop (a run, a
+    /// host's step, a refresh), costs a call per major step; a copy
+    /// inlined into each was instead left a call by the compiler once
+    /// there were several (the step library's entries).
+    #[inline(never)]
     fn output_sweep(&mut self) -> Result<(), SimError> {
         let c = &self.clockwork;
         let all = c.first || c.at_event || c.inputs_changed;
@@ -421,14 +430,18 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
         Ok(())
     }
 
+    #[inline(always)]
     fn external_input(&mut self, block: usize) -> Option<&mut [f64]> {
         self.step.external_input(block)
     }
 
+    /// Never inlined, the generated sweep always into it (as `output_sweep`).
+    #[inline(never)]
     fn update_sweep(&mut self) {
         self.step.updates(self.clockwork.t, &self.x, &self.clockwork.hit);
     }
 
+    #[inline(always)]
     fn earliest_event(&self) -> (f64, u32) {
         self.step.next_event(self.clockwork.t)
     }
@@ -437,10 +450,12 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
         self.step.block_event(block, t)
     }
 
+    #[inline(always)]
     fn latch_held(&mut self) {
         self.step.hold_inputs();
     }
 
+    #[inline(always)]
     fn step_held(&mut self, dt: f64) {
         self.step.step_held(dt, &mut self.x);
     }
@@ -470,10 +485,12 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
         Ok(Some(t))
     }
 
+    #[inline(always)]
     fn clamp_states(&mut self) -> bool {
         self.step.clamp_states(&mut self.x[..self.clockwork.n_integrated])
     }
 
+    #[inline(always)]
     fn keeps_history(&self) -> bool {
         G::KEEPS_HISTORY
     }
@@ -482,6 +499,7 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
         self.step.left_limits(self.clockwork.t, &self.x[..self.clockwork.n_integrated], at);
     }
 
+    #[inline(always)]
     fn plain_grid_steps(&self) -> bool {
         !G::KEEPS_HISTORY && self.watch.blocks.is_empty() && self.dense.is_none()
     }
@@ -494,28 +512,33 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
         self.blame().state(self.step.signals(), self.clockwork.t, &self.x)
     }
 
+    #[inline(always)]
     fn step_started(&mut self, t0: f64) {
         if let Some(dense) = &mut self.dense {
             dense.start(t0, &self.x);
         }
     }
 
+    #[inline(always)]
     fn solver_reached(&mut self, t: f64) {
         if let Some(dense) = &mut self.dense {
             dense.solver_end(t, &self.x[..self.clockwork.n_integrated]);
         }
     }
 
+    #[inline(always)]
     fn step_ended(&mut self) {
         if let Some(dense) = &mut self.dense {
             dense.end(self.clockwork.t);
         }
     }
 
+    #[inline(always)]
     fn major_row(&mut self, t: f64) -> Option<f64> {
         self.dense.as_mut().map_or(Some(t), |dense| dense.major_row(t))
     }
 
+    #[inline(always)]
     fn rows_inside_step(&mut self, sink: &mut dyn FnMut(f64, &[f64]) -> bool) -> bool {
         let Some(dense) = &mut self.dense else { return true };
         let mut stage = Stage { step: &mut self.step, t_end: 0.0 };

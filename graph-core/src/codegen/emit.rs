@@ -204,7 +204,7 @@ impl<'m> Gen<'m> {
     /// event-only blocks when every block runs, discrete ones at hits.
     fn outputs(&self, out: &mut String) {
         out.push_str(
-            "    #[allow(unused_variables)]\n    #[inline]\n    fn outputs(&mut self, t: f64, x: &[f64], first: bool, all: bool, hit: &[bool]) -> bool {\n",
+            "    #[allow(unused_variables)]\n    #[inline(always)]\n    fn outputs(&mut self, t: f64, x: &[f64], first: bool, all: bool, hit: &[bool]) -> bool {\n",
         );
         fix_states(out, false, self.model.n_states);
         self.fix_hits(out);
@@ -265,7 +265,7 @@ impl<'m> Gen<'m> {
 
     /// The update sweep: continuous blocks always, discrete ones at hits.
     fn updates(&self, out: &mut String) {
-        out.push_str("    #[allow(unused_variables)]\n    #[inline]\n    fn updates(&mut self, t: f64, x: &[f64], hit: &[bool]) {\n");
+        out.push_str("    #[allow(unused_variables)]\n    #[inline(always)]\n    fn updates(&mut self, t: f64, x: &[f64], hit: &[bool]) {\n");
         fix_states(out, false, self.model.n_states);
         self.fix_hits(out);
         bind_signals(out);
@@ -287,12 +287,12 @@ impl<'m> Gen<'m> {
     /// Held LTI blocks: their inputs latched at the major step, their
     /// states advanced by the exact transition.
     fn held(&self, out: &mut String) {
-        out.push_str("    #[inline]\n    fn hold_inputs(&mut self) {\n");
+        out.push_str("    #[inline(always)]\n    fn hold_inputs(&mut self) {\n");
         for (j, (_, p)) in self.held.iter().enumerate() {
             let _ = writeln!(out, "        self.u{j}.copy_from_slice(&self.s[{}..{}]);", p.offset, p.offset + p.width);
         }
         out.push_str(
-            "    }\n\n    #[allow(unused_variables)]\n    #[inline]\n    fn step_held(&mut self, dt: f64, x: &mut [f64]) {\n",
+            "    }\n\n    #[allow(unused_variables)]\n    #[inline(always)]\n    fn step_held(&mut self, dt: f64, x: &mut [f64]) {\n",
         );
         if !self.held.is_empty() {
             fix_states(out, true, self.model.n_states);

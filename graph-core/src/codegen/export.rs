@@ -19,6 +19,7 @@
 use super::{Compiled, CompiledSnapshot, GeneratedStep};
 use crate::registry::Registry;
 use crate::sim::RunStats;
+use crate::trace::Recorder;
 use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
@@ -87,6 +88,11 @@ impl TextSink {
 /// for the call only); returns whether the run goes on.
 pub type Sample = unsafe extern "C" fn(ctx: *mut c_void, t: f64, signals: *const f64, len: usize) -> bool;
 
+/// Receives `n` rows of `width` values each, one after another — the
+/// time and the recorded columns, as [`Recorder`] makes them — valid for
+/// the call only; returns whether the run goes on.
+pub type Rows = unsafe extern "C" fn(ctx: *mut c_void, rows: *const f64, n: usize, width: usize) -> bool;
+
 /// [`RunWhile`]'s answer: the run reached its stop time.
 pub const FINISHED: i32 = 1;
 /// [`RunWhile`]'s answer: the sink ended the run.
@@ -104,6 +110,19 @@ pub type Reset = unsafe extern "C" fn(run: *mut c_void);
 /// [`crate::Simulator::run_while`]: [`FINISHED`], [`CUT`] or [`FAILED`].
 pub type RunWhile =
     unsafe extern "C" fn(run: *mut c_void, sample: Sample, ctx: *mut c_void, error: *const TextSink) -> i32;
+/// [`RunWhile`], recording in the library: the graph's rows (every
+/// `record_every`-th major step and the last) are handed to `rows`
+/// `batch` at a time and the rest at the end, so a major step costs the
+/// program nothing; after `max_steps` major steps and one more the run is
+/// [`CUT`], as when `rows` answers false.
+pub type RunRows = unsafe extern "C" fn(
+    run: *mut c_void,
+    max_steps: u64,
+    batch: usize,
+    rows: Rows,
+    ctx: *mut c_void,
+    error: *const TextSink,
+) -> i32;
 pub type Time = unsafe extern "C" fn(run: *const c_void) -> f64;
 pub type GetStats = unsafe extern "C" fn(run: *const c_void) -> RunStats;
 /// [`crate::Simulator::warnings`]: `sink` receives each, one call apiece.
@@ -133,6 +152,7 @@ pub struct Api {
     pub destroy: Destroy,
     pub reset: Reset,
     pub run_while: RunWhile,
+    pub run_rows: RunRows,
     pub time: Time,
     pub stats: GetStats,
     pub warnings: Warnings,
@@ -160,6 +180,7 @@ impl Api {
             destroy: destroy::<G>,
             reset: reset::<G>,
             run_while: run_while::<G>,
+            run_rows: run_rows::<G>,
             time: time::<G>,
             stats: stats::<G>,
             warnings: warnings::<G>,
@@ -203,9 +224,37 @@ fn panic_text(payload: Box<dyn std::any::Any + Send>) -> String {
     format!("internal error in the accelerated run: {what}")
 }
 
+/// A run as the library keeps it: the generated step's run, and the
+/// recorder that makes its rows ([`RunRows`]) as the program would.
+struct LibraryRun<G: GeneratedStep> {
+    run: Compiled<G>,
+    recorder: Recorder,
+    /// Rows waiting to be handed over, one after another.
+    rows: Vec<f64>,
+}
+
+/// The run behind a handle from [`create`].
+///
+/// # Safety
+/// `run` came from `create::<G>` and is not destroyed; the loader calls
+/// one entry at a time for it.
+unsafe fn library_run<'a, G: Exported>(run: *mut c_void) -> &'a mut LibraryRun<G> {
+    // SAFETY: the caller's promise.
+    unsafe { &mut *run.cast::<LibraryRun<G>>() }
+}
+
+/// [`library_run`], to read.
+///
+/// # Safety
+/// As for [`library_run`].
+unsafe fn library_run_ref<'a, G: Exported>(run: *const c_void) -> &'a LibraryRun<G> {
+    // SAFETY: the caller's promise.
+    unsafe { &*run.cast::<LibraryRun<G>>() }
+}
+
 /// # Safety
 /// `spec` and `error` point to valid values for the call.
-unsafe fn prepare<G: Exported>(spec: &Spec) -> Result<Compiled<G>, String> {
+unsafe fn prepare<G: Exported>(spec: &Spec) -> Result<LibraryRun<G>, String> {
     // SAFETY: the loader passes strings it owns for the call.
     let (text, file) = unsafe { (spec.text.text()?, spec.file.text()?) };
     let pairs = if spec.n_sets == 0 {
@@ -224,7 +273,8 @@ unsafe fn prepare<G: Exported>(spec: &Spec) -> Result<Compiled<G>, String> {
         flat.sim.seed = spec.seed;
     }
     let model = crate::compile(&flat, &G::registry()).map_err(|d| d.to_string())?;
-    Compiled::<G>::new(&model, (!spec.stop.is_nan()).then_some(spec.stop))
+    let run = Compiled::<G>::new(&model, (!spec.stop.is_nan()).then_some(spec.stop))?;
+    Ok(LibraryRun { run, recorder: Recorder::new(&model), rows: Vec::new() })
 }
 
 unsafe extern "C" fn create<G: Exported>(spec: *const Spec, error: *const TextSink) -> *mut c_void {
@@ -247,13 +297,13 @@ unsafe extern "C" fn create<G: Exported>(spec: *const Spec, error: *const TextSi
 unsafe extern "C" fn destroy<G: Exported>(run: *mut c_void) {
     if !run.is_null() {
         // SAFETY: `run` came from `create::<G>` and is destroyed once.
-        let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(run.cast::<Compiled<G>>()) })));
+        let _ = catch_unwind(AssertUnwindSafe(|| drop(unsafe { Box::from_raw(run.cast::<LibraryRun<G>>()) })));
     }
 }
 
 unsafe extern "C" fn reset<G: Exported>(run: *mut c_void) {
     // SAFETY: `run` came from `create::<G>`; the loader owns it alone.
-    let run = unsafe { &mut *run.cast::<Compiled<G>>() };
+    let run = &mut unsafe { library_run::<G>(run) }.run;
     // Resetting runs the blocks' `initialize`, plain code that does not
     // panic; were one to, the run would be left as it is.
     let _ = catch_unwind(AssertUnwindSafe(|| run.reset()));
@@ -266,13 +316,64 @@ unsafe extern "C" fn run_while<G: Exported>(
     error: *const TextSink,
 ) -> i32 {
     // SAFETY: `run` came from `create::<G>`; the loader owns it alone.
-    let (run, error) = unsafe { (&mut *run.cast::<Compiled<G>>(), &*error) };
+    let (run, error) = unsafe { (&mut library_run::<G>(run).run, &*error) };
     let result = catch_unwind(AssertUnwindSafe(|| {
         run.run_while(|t, signals| {
             // SAFETY: the loader's sample accepts the buffer for the call.
             unsafe { sample(ctx, t, signals.as_ptr(), signals.len()) }
         })
     }));
+    run_answer(result, error)
+}
+
+unsafe extern "C" fn run_rows<G: Exported>(
+    run: *mut c_void,
+    max_steps: u64,
+    batch: usize,
+    rows: Rows,
+    ctx: *mut c_void,
+    error: *const TextSink,
+) -> i32 {
+    // SAFETY: `run` came from `create::<G>`; the loader owns it alone.
+    let (LibraryRun { run, recorder, rows: pending }, error) = unsafe { (library_run::<G>(run), &*error) };
+    let mut recorder = recorder.clone();
+    let width = recorder.width();
+    // At most 65 536 rows at a time: a batch is allocated once per call.
+    let full = batch.clamp(1, 1 << 16) * width;
+    pending.clear();
+    if pending.try_reserve(full).is_err() {
+        error.send(&format!("cannot allocate a batch of {full} recorded values"));
+        return FAILED;
+    }
+    let hand_over = |pending: &mut Vec<f64>| {
+        // SAFETY: the loader's `rows` accepts the buffer for the call.
+        let go_on = unsafe { rows(ctx, pending.as_ptr(), pending.len() / width, width) };
+        pending.clear();
+        go_on
+    };
+    let result = catch_unwind(AssertUnwindSafe(|| {
+        let (mut steps, mut go_on) = (0u64, true);
+        let outcome = run.run_while(|t, signals| {
+            recorder.sample_onto(t, signals, pending);
+            steps += 1;
+            if pending.len() >= full {
+                go_on = hand_over(pending);
+            }
+            go_on && steps <= max_steps
+        });
+        recorder.flush(&mut |row| pending.extend_from_slice(row));
+        if !pending.is_empty() {
+            // The run is over: the answer changes nothing.
+            hand_over(pending);
+        }
+        outcome
+    }));
+    run_answer(result, error)
+}
+
+/// A run's outcome as [`RunWhile`] answers it, a failure's message (or a
+/// panic's) sent to `error`.
+fn run_answer(result: std::thread::Result<Result<bool, crate::sim::SimError>>, error: &TextSink) -> i32 {
     match result {
         Ok(Ok(true)) => FINISHED,
         Ok(Ok(false)) => CUT,
@@ -289,17 +390,17 @@ unsafe extern "C" fn run_while<G: Exported>(
 
 unsafe extern "C" fn time<G: Exported>(run: *const c_void) -> f64 {
     // SAFETY: `run` came from `create::<G>`.
-    unsafe { &*run.cast::<Compiled<G>>() }.time()
+    unsafe { library_run_ref::<G>(run) }.run.time()
 }
 
 unsafe extern "C" fn stats<G: Exported>(run: *const c_void) -> RunStats {
     // SAFETY: `run` came from `create::<G>`.
-    unsafe { &*run.cast::<Compiled<G>>() }.stats()
+    unsafe { library_run_ref::<G>(run) }.run.stats()
 }
 
 unsafe extern "C" fn warnings<G: Exported>(run: *const c_void, sink: *const TextSink) {
     // SAFETY: `run` came from `create::<G>`; the loader's sink is valid for the call.
-    let (run, sink) = unsafe { (&*run.cast::<Compiled<G>>(), &*sink) };
+    let (run, sink) = unsafe { (&library_run_ref::<G>(run).run, &*sink) };
     for w in run.warnings() {
         sink.send(w);
     }
@@ -330,20 +431,20 @@ unsafe extern "C" fn set_input<G: Exported>(
 ) -> i32 {
     // SAFETY: `run` came from `create::<G>`; `values` holds `len` numbers
     // and `error` is valid, for the call.
-    let (run, error) = unsafe { (&mut *run.cast::<Compiled<G>>(), &*error) };
+    let (run, error) = unsafe { (&mut library_run::<G>(run).run, &*error) };
     let values = if len == 0 { &[][..] } else { unsafe { std::slice::from_raw_parts(values, len) } };
     host_call(error, || run.set_input(block, values))
 }
 
 unsafe extern "C" fn advance_to<G: Exported>(run: *mut c_void, t: f64, error: *const TextSink) -> i32 {
     // SAFETY: `run` came from `create::<G>`; `error` is valid for the call.
-    let (run, error) = unsafe { (&mut *run.cast::<Compiled<G>>(), &*error) };
+    let (run, error) = unsafe { (&mut library_run::<G>(run).run, &*error) };
     host_call(error, || run.advance_to(t))
 }
 
 unsafe extern "C" fn signals_now<G: Exported>(run: *mut c_void, len: *mut usize, error: *const TextSink) -> *const f64 {
     // SAFETY: `run` came from `create::<G>`; `len` and `error` are valid for the call.
-    let (run, error) = unsafe { (&mut *run.cast::<Compiled<G>>(), &*error) };
+    let (run, error) = unsafe { (&mut library_run::<G>(run).run, &*error) };
     let mut found = (std::ptr::null(), 0);
     let answer = host_call(error, || run.signals_now().map(|signals| found = (signals.as_ptr(), signals.len())));
     // SAFETY: as above.
@@ -353,7 +454,7 @@ unsafe extern "C" fn signals_now<G: Exported>(run: *mut c_void, len: *mut usize,
 
 unsafe extern "C" fn save<G: Exported>(run: *const c_void) -> *mut c_void {
     // SAFETY: `run` came from `create::<G>`.
-    let run = unsafe { &*run.cast::<Compiled<G>>() };
+    let run = &unsafe { library_run_ref::<G>(run) }.run;
     // Cloning blocks is plain code that does not panic; were one to, there
     // is no snapshot.
     catch_unwind(AssertUnwindSafe(|| Box::into_raw(Box::new(run.state())).cast())).unwrap_or(std::ptr::null_mut())
@@ -363,7 +464,7 @@ unsafe extern "C" fn restore<G: Exported>(run: *mut c_void, snapshot: *const c_v
     // SAFETY: `run` came from `create::<G>`, `snapshot` from `save::<G>`
     // (of the same library: the loader keeps them together).
     let (run, snapshot, error) =
-        unsafe { (&mut *run.cast::<Compiled<G>>(), &*snapshot.cast::<CompiledSnapshot<G>>(), &*error) };
+        unsafe { (&mut library_run::<G>(run).run, &*snapshot.cast::<CompiledSnapshot<G>>(), &*error) };
     host_call(error, || run.restore(snapshot))
 }
 

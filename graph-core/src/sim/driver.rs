@@ -264,7 +264,7 @@ pub(crate) fn reset(s: &mut impl Sweeps) {
 }
 
 /// Step (1) of a major step.
-#[inline]
+#[inline(always)]
 pub(crate) fn outputs(s: &mut impl Sweeps) -> Result<(), SimError> {
     let result = s.output_sweep();
     let c = s.clockwork_mut();
@@ -275,6 +275,9 @@ pub(crate) fn outputs(s: &mut impl Sweeps) -> Result<(), SimError> {
 
 /// Steps (3) and (4): the updates, then integration to the next major
 /// step — or to the first zero crossing before it.
+// Inlined into each loop that calls it (a run, a host's `advance_to`):
+// a call per major step would cost the generated steps a tenth.
+#[inline(always)]
 pub(crate) fn advance(s: &mut impl Sweeps) -> Result<(), SimError> {
     s.update_sweep();
     if std::mem::take(&mut s.clockwork_mut().events_may_change) {
@@ -344,6 +347,7 @@ pub(crate) fn advance(s: &mut impl Sweeps) -> Result<(), SimError> {
 /// rounding only), marks the grid and the clocks passed, and sees no
 /// event; here those same results are set without computing and comparing
 /// the candidates.
+#[inline(always)]
 fn advance_to_grid_point(s: &mut impl Sweeps, next: f64) -> Result<(), SimError> {
     let c = s.clockwork_mut();
     let t0 = c.t;
@@ -356,6 +360,7 @@ fn advance_to_grid_point(s: &mut impl Sweeps, next: f64) -> Result<(), SimError>
 }
 
 /// Every major step's end: states finite, time not standing still too long.
+#[inline(always)]
 fn end_major_step(s: &mut impl Sweeps, t0: f64) -> Result<(), SimError> {
     if !all_finite(s.states()) {
         return Err(s.blame_states());
