@@ -345,30 +345,36 @@ unsafe extern "C" fn run_rows<G: Exported>(
         error.send(&format!("cannot allocate a batch of {full} recorded values"));
         return FAILED;
     }
-    let hand_over = |pending: &mut Vec<f64>| {
-        // SAFETY: the loader's `rows` accepts the buffer for the call.
-        let go_on = unsafe { rows(ctx, pending.as_ptr(), pending.len() / width, width) };
-        pending.clear();
-        go_on
-    };
     let result = catch_unwind(AssertUnwindSafe(|| {
         let (mut steps, mut go_on) = (0u64, true);
         let outcome = run.run_while(|t, signals| {
             recorder.sample_onto(t, signals, pending);
             steps += 1;
             if pending.len() >= full {
-                go_on = hand_over(pending);
+                go_on = hand_over(rows, ctx, pending, width);
             }
             go_on && steps <= max_steps
         });
         recorder.flush(&mut |row| pending.extend_from_slice(row));
         if !pending.is_empty() {
             // The run is over: the answer changes nothing.
-            hand_over(pending);
+            hand_over(rows, ctx, pending, width);
         }
         outcome
     }));
     run_answer(result, error)
+}
+
+/// Hands the batch `pending` to the loader's `rows` and empties it; its
+/// answer. Out of line and cold: once in 256 steps, so the step's own
+/// closure stays small enough to be inlined into the run's loop.
+#[cold]
+#[inline(never)]
+fn hand_over(rows: Rows, ctx: *mut c_void, pending: &mut Vec<f64>, width: usize) -> bool {
+    // SAFETY: the loader's `rows` accepts the buffer for the call.
+    let go_on = unsafe { rows(ctx, pending.as_ptr(), pending.len() / width, width) };
+    pending.clear();
+    go_on
 }
 
 /// A run's outcome as [`RunWhile`] answers it, a failure's message (or a
