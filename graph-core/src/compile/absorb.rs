@@ -8,7 +8,7 @@ use super::{Driver, InnerBlock, Node, resolved};
 use crate::block::{Block, InputPort, Interface, Port, SampleTime, Width};
 use crate::composite::Member;
 use crate::diag::Diagnostic;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// Where everything lies on the containing block's buffer.
 pub(super) struct Layout {
@@ -26,8 +26,23 @@ pub(super) struct Layout {
     outs: HashMap<usize, Vec<Port>>,
 }
 
+/// The feedthrough wires between `members`, as (from, to) positions in
+/// `members`: the order the members must run in within one evaluation.
+pub(super) fn feedthrough_edges(nodes: &[Node], drivers: &[Vec<Driver>], members: &[usize]) -> Vec<(usize, usize)> {
+    let position: HashMap<usize, usize> = members.iter().enumerate().map(|(k, &m)| (m, k)).collect();
+    let mut edges = Vec::new();
+    for (k, &m) in members.iter().enumerate() {
+        for (p, d) in drivers[m].iter().enumerate() {
+            if let Some(&from) = position.get(&d.src).filter(|_| nodes[m].iface.inputs[p].feedthrough) {
+                edges.push((from, k));
+            }
+        }
+    }
+    edges
+}
+
 pub(super) fn lay_out(nodes: &[Node], drivers: &[Vec<Driver>], members: &[usize], sample_time: SampleTime) -> Layout {
-    let inside: HashMap<usize, ()> = members.iter().map(|&m| (m, ())).collect();
+    let inside: HashSet<usize> = members.iter().copied().collect();
     let mut iface = Interface::new(sample_time);
     let mut buffer_len = 0;
     let mut place = |width: usize| {
@@ -37,7 +52,7 @@ pub(super) fn lay_out(nodes: &[Node], drivers: &[Vec<Driver>], members: &[usize]
     let (mut outer, mut external) = (Vec::new(), Vec::new());
     let mut input_place: HashMap<(usize, usize), Port> = HashMap::new();
     for &m in members {
-        for (p, d) in drivers[m].iter().enumerate().filter(|(_, d)| !inside.contains_key(&d.src)) {
+        for (p, d) in drivers[m].iter().enumerate().filter(|(_, d)| !inside.contains(&d.src)) {
             let port = &nodes[m].iface.inputs[p];
             let width = resolved(port.width, nodes[m].width);
             iface =

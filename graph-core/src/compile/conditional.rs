@@ -82,15 +82,7 @@ pub(super) fn collapse(
         }
     }
     // The members in an order where each follows those it reads at once.
-    let position: HashMap<usize, usize> = members.iter().enumerate().map(|(k, &m)| (m, k)).collect();
-    let mut edges = Vec::new();
-    for (k, &m) in members.iter().enumerate() {
-        for (p, d) in drivers[m].iter().enumerate() {
-            if let Some(&from) = position.get(&d.src).filter(|_| nodes[m].iface.inputs[p].feedthrough) {
-                edges.push((from, k));
-            }
-        }
-    }
+    let edges = absorb::feedthrough_edges(nodes, drivers, &members);
     let order = topological(members.len(), &edges, &[]);
     if order.len() < members.len() {
         return Err(Diagnostic::at(

@@ -11,7 +11,6 @@ use super::{Driver, Node, absorb, resolved};
 use crate::algebraic::AlgebraicLoop;
 use crate::block::SampleTime;
 use crate::diag::Diagnostic;
-use std::collections::HashMap;
 
 /// Largest loop whose cut is searched exhaustively for the fewest blocks;
 /// beyond it, greedily.
@@ -40,16 +39,7 @@ pub(super) fn collapse(
             format!("algebraic loop {text}: `{}` keeps its input's past and cannot be solved for", nodes[m].flat.path);
         return Err(at(nodes, message).with_hint("break the loop with a block without feedthrough"));
     }
-    let is_member: HashMap<usize, usize> = members.iter().enumerate().map(|(k, &m)| (m, k)).collect();
-    // Feedthrough edges inside the loop, as member positions.
-    let mut edges = Vec::new();
-    for (k, &m) in members.iter().enumerate() {
-        for (p, d) in drivers[m].iter().enumerate() {
-            if let Some(&from) = is_member.get(&d.src).filter(|_| nodes[m].iface.inputs[p].feedthrough) {
-                edges.push((from, k));
-            }
-        }
-    }
+    let edges = absorb::feedthrough_edges(nodes, drivers, members);
     let width = |k: usize| -> usize {
         let m = members[k];
         nodes[m].iface.outputs.iter().map(|p| resolved(p.width, nodes[m].width)).sum()
