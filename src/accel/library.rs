@@ -152,20 +152,16 @@ impl AcceleratedRun {
     /// [`ctlgraph_core::Model::host_input`]) from now on, as
     /// [`ctlgraph_core::Simulator::set_input`].
     pub fn set_input(&mut self, block: usize, value: &[f64]) -> Result<(), String> {
-        let mut message = String::new();
-        let error = text_sink(&mut message);
-        // SAFETY: `run` is live; `value` and `error` outlive the call.
-        let answer = unsafe { (self.lib.api.set_input)(self.run, block, value.as_ptr(), value.len(), &error) };
-        if answer == export::DONE { Ok(()) } else { Err(message) }
+        let set_input = self.lib.api.set_input;
+        // SAFETY: `value` outlives the call.
+        self.host_call(|run, error| unsafe { set_input(run, block, value.as_ptr(), value.len(), error) })
     }
 
     /// [`ctlgraph_core::Simulator::advance_to`], in the library.
     pub fn advance_to(&mut self, t: f64) -> Result<(), SimError> {
-        let mut message = String::new();
-        let error = text_sink(&mut message);
-        // SAFETY: `run` is live; `error` outlives the call.
-        let answer = unsafe { (self.lib.api.advance_to)(self.run, t, &error) };
-        if answer == export::DONE { Ok(()) } else { Err(SimError::Reported(message)) }
+        let advance_to = self.lib.api.advance_to;
+        // SAFETY: as `host_call` promises.
+        self.host_call(|run, error| unsafe { advance_to(run, t, error) }).map_err(SimError::Reported)
     }
 
     /// [`ctlgraph_core::Simulator::signals_now`], in the library.
@@ -198,26 +194,26 @@ impl AcceleratedRun {
         if !Arc::ptr_eq(&self.lib, &snapshot.lib) {
             return Err("the snapshot was taken of another run".to_string());
         }
+        let (restore, saved) = (self.lib.api.restore, snapshot.snapshot);
+        // SAFETY: `saved` came from the same library's `save`.
+        self.host_call(|run, error| unsafe { restore(run, saved, error) })
+    }
+
+    /// A host's call into the library: `call` gets the live run and an
+    /// error sink that outlives it; its message when it answers other than
+    /// [`export::DONE`].
+    fn host_call(&mut self, call: impl FnOnce(*mut c_void, &TextSink) -> i32) -> Result<(), String> {
         let mut message = String::new();
         let error = text_sink(&mut message);
-        // SAFETY: `run` is live; `snapshot` came from the same library's
-        // `save`; `error` outlives the call.
-        let answer = unsafe { (self.lib.api.restore)(self.run, snapshot.snapshot, &error) };
-        if answer == export::DONE { Ok(()) } else { Err(message) }
+        if call(self.run, &error) == export::DONE { Ok(()) } else { Err(message) }
     }
 
     /// [`ctlgraph_core::Simulator::run_while`], in the library. A panic in
     /// `sink` is carried over the library and resumed here.
     pub fn run_while(&mut self, sink: &mut dyn FnMut(f64, &[f64]) -> bool) -> Result<bool, SimError> {
-        let mut state = SampleState { sink, panic: None };
-        let mut message = String::new();
-        let error = text_sink(&mut message);
-        // SAFETY: `run` is live; `state` and `error` outlive the call.
-        let answer = unsafe { (self.lib.api.run_while)(self.run, sample, (&raw mut state).cast::<c_void>(), &error) };
-        if let Some(payload) = state.panic {
-            resume_unwind(payload);
-        }
-        run_outcome(answer, message)
+        let run_while = self.lib.api.run_while;
+        // SAFETY: as `run_guarded` promises.
+        self.run_guarded(sink, |run, ctx, error| unsafe { run_while(run, sample, ctx, error) })
     }
 
     /// Runs to the stop time recording in the library, as
@@ -234,67 +230,72 @@ impl AcceleratedRun {
         batch: usize,
         sink: &mut dyn FnMut(&[f64], usize) -> bool,
     ) -> Result<bool, SimError> {
-        let mut state = RowsState { sink, panic: None };
+        let run_rows = self.lib.api.run_rows;
+        // SAFETY: as `run_guarded` promises.
+        self.run_guarded(sink, |run, ctx, error| unsafe { run_rows(run, max_steps, batch, rows, ctx, error) })
+    }
+
+    /// A whole run in the library: `start` gets the live run, the context
+    /// of `sink` (a [`Guarded`]) for the trampoline it passes, and an error
+    /// sink that outlives the call. A panic in `sink` is resumed here.
+    fn run_guarded<S: ?Sized>(
+        &mut self,
+        sink: &mut S,
+        start: impl FnOnce(*mut c_void, *mut c_void, &TextSink) -> i32,
+    ) -> Result<bool, SimError> {
+        let mut guarded = Guarded { sink, panic: None };
         let mut message = String::new();
         let error = text_sink(&mut message);
-        // SAFETY: `run` is live; `state` and `error` outlive the call.
-        let answer = unsafe {
-            (self.lib.api.run_rows)(self.run, max_steps, batch, rows, (&raw mut state).cast::<c_void>(), &error)
-        };
-        if let Some(payload) = state.panic {
+        let answer = start(self.run, (&raw mut guarded).cast::<c_void>(), &error);
+        if let Some(payload) = guarded.panic {
             resume_unwind(payload);
         }
-        run_outcome(answer, message)
-    }
-}
-
-/// What a run in the library answered: whether it reached its stop time.
-fn run_outcome(answer: i32, message: String) -> Result<bool, SimError> {
-    match answer {
-        export::FINISHED => Ok(true),
-        export::CUT => Ok(false),
-        _ => Err(SimError::Reported(message)),
-    }
-}
-
-/// The sink behind [`rows`], and a panic it raised.
-struct RowsState<'a> {
-    sink: &'a mut dyn FnMut(&[f64], usize) -> bool,
-    panic: Option<Box<dyn std::any::Any + Send>>,
-}
-
-unsafe extern "C" fn rows(ctx: *mut c_void, values: *const f64, n: usize, width: usize) -> bool {
-    // SAFETY: `ctx` is the `RowsState` of the `run_rows` call in progress.
-    let state = unsafe { &mut *ctx.cast::<RowsState>() };
-    // SAFETY: the library passes `n` rows of `width` values for the call.
-    let values = if n * width == 0 { &[][..] } else { unsafe { std::slice::from_raw_parts(values, n * width) } };
-    match catch_unwind(AssertUnwindSafe(|| (state.sink)(values, width))) {
-        Ok(go_on) => go_on,
-        Err(payload) => {
-            state.panic = Some(payload);
-            false
+        match answer {
+            export::FINISHED => Ok(true),
+            export::CUT => Ok(false),
+            _ => Err(SimError::Reported(message)),
         }
     }
 }
 
-/// The sink behind [`sample`], and a panic it raised.
-struct SampleState<'a> {
-    sink: &'a mut dyn FnMut(f64, &[f64]) -> bool,
+/// A program's sink called from inside the library, and a panic it
+/// raised: caught there (no panic crosses the library) and resumed by
+/// [`AcceleratedRun::run_guarded`].
+struct Guarded<'a, S: ?Sized> {
+    sink: &'a mut S,
     panic: Option<Box<dyn std::any::Any + Send>>,
+}
+
+impl<S: ?Sized> Guarded<'_, S> {
+    /// `call` of the sink, or false (the run ends) when it panicked.
+    fn call(&mut self, call: impl FnOnce(&mut S) -> bool) -> bool {
+        match catch_unwind(AssertUnwindSafe(|| call(self.sink))) {
+            Ok(go_on) => go_on,
+            Err(payload) => {
+                self.panic = Some(payload);
+                false
+            }
+        }
+    }
+}
+
+type RowsSink = dyn FnMut(&[f64], usize) -> bool;
+type SampleSink = dyn FnMut(f64, &[f64]) -> bool;
+
+unsafe extern "C" fn rows(ctx: *mut c_void, values: *const f64, n: usize, width: usize) -> bool {
+    // SAFETY: `ctx` is the `Guarded` of the `run_rows` call in progress.
+    let guarded = unsafe { &mut *ctx.cast::<Guarded<RowsSink>>() };
+    // SAFETY: the library passes `n` rows of `width` values for the call.
+    let values = if n * width == 0 { &[][..] } else { unsafe { std::slice::from_raw_parts(values, n * width) } };
+    guarded.call(|sink| sink(values, width))
 }
 
 unsafe extern "C" fn sample(ctx: *mut c_void, t: f64, signals: *const f64, len: usize) -> bool {
-    // SAFETY: `ctx` is the `SampleState` of the `run_while` call in progress.
-    let state = unsafe { &mut *ctx.cast::<SampleState>() };
+    // SAFETY: `ctx` is the `Guarded` of the `run_while` call in progress.
+    let guarded = unsafe { &mut *ctx.cast::<Guarded<SampleSink>>() };
     // SAFETY: the library passes its signal buffer for the call.
     let signals = unsafe { std::slice::from_raw_parts(signals, len) };
-    match catch_unwind(AssertUnwindSafe(|| (state.sink)(t, signals))) {
-        Ok(go_on) => go_on,
-        Err(payload) => {
-            state.panic = Some(payload);
-            false
-        }
-    }
+    guarded.call(|sink| sink(t, signals))
 }
 
 /// A sink appending the library's messages to `message`.

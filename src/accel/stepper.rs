@@ -7,6 +7,7 @@
 //! handed block indices and buffers only.
 
 use super::{AcceleratedRun, AcceleratedSnapshot, Runner};
+use ctlgraph_core::block::Port;
 use ctlgraph_core::{Diagnostic, Model, SimError, Simulator, Snapshot};
 use std::sync::Arc;
 
@@ -89,21 +90,23 @@ impl Stepper {
     /// [`Simulator::output`].
     pub fn output(&mut self, name: &str) -> Result<&[f64], Diagnostic> {
         let port = self.model.output_port(name)?;
-        Ok(&self.signals_now()?[port.offset..port.offset + port.width])
+        self.port_now(port)
     }
 
     /// [`Simulator::signal`].
     pub fn signal(&mut self, name: &str) -> Result<&[f64], Diagnostic> {
         let port = self.model.host_signal_port(name)?;
-        Ok(&self.signals_now()?[port.offset..port.offset + port.width])
+        self.port_now(port)
     }
 
-    fn signals_now(&mut self) -> Result<&[f64], Diagnostic> {
-        match &mut self.engine {
+    /// The values on `port` at the present time, outputs computed.
+    fn port_now(&mut self, port: Port) -> Result<&[f64], Diagnostic> {
+        let signals = match &mut self.engine {
             Engine::Interpreted(sim) => sim.signals_now(),
             Engine::Accelerated(run) => run.signals_now(),
         }
-        .map_err(|e| Diagnostic::plain(e.to_string()))
+        .map_err(|e| Diagnostic::plain(e.to_string()))?;
+        Ok(&signals[port.offset..port.offset + port.width])
     }
 
     /// [`Simulator::state`].

@@ -281,17 +281,8 @@ unsafe extern "C" fn create<G: Exported>(spec: *const Spec, error: *const TextSi
     // SAFETY: the loader passes valid pointers for the call.
     let (spec, error) = unsafe { (&*spec, &*error) };
     // SAFETY: as above.
-    match catch_unwind(AssertUnwindSafe(|| unsafe { prepare::<G>(spec) })) {
-        Ok(Ok(run)) => Box::into_raw(Box::new(run)).cast(),
-        Ok(Err(why)) => {
-            error.send(&why);
-            std::ptr::null_mut()
-        }
-        Err(payload) => {
-            error.send(&panic_text(payload));
-            std::ptr::null_mut()
-        }
-    }
+    let result = catch_unwind(AssertUnwindSafe(|| unsafe { prepare::<G>(spec) }));
+    answer(result, error, |run| Box::into_raw(Box::new(run)).cast(), std::ptr::null_mut())
 }
 
 unsafe extern "C" fn destroy<G: Exported>(run: *mut c_void) {
@@ -377,21 +368,30 @@ fn hand_over(rows: Rows, ctx: *mut c_void, pending: &mut Vec<f64>, width: usize)
     go_on
 }
 
-/// A run's outcome as [`RunWhile`] answers it, a failure's message (or a
-/// panic's) sent to `error`.
-fn run_answer(result: std::thread::Result<Result<bool, crate::sim::SimError>>, error: &TextSink) -> i32 {
+/// What an entry answers for `result`: `done` of its value, or `failed`
+/// with the error's message (or the panic's) sent to `error`.
+fn answer<T, E: std::fmt::Display, R>(
+    result: std::thread::Result<Result<T, E>>,
+    error: &TextSink,
+    done: impl FnOnce(T) -> R,
+    failed: R,
+) -> R {
     match result {
-        Ok(Ok(true)) => FINISHED,
-        Ok(Ok(false)) => CUT,
+        Ok(Ok(value)) => done(value),
         Ok(Err(e)) => {
             error.send(&e.to_string());
-            FAILED
+            failed
         }
         Err(payload) => {
             error.send(&panic_text(payload));
-            FAILED
+            failed
         }
     }
+}
+
+/// A run's outcome as [`RunWhile`] answers it.
+fn run_answer(result: std::thread::Result<Result<bool, crate::sim::SimError>>, error: &TextSink) -> i32 {
+    answer(result, error, |finished| if finished { FINISHED } else { CUT }, FAILED)
 }
 
 unsafe extern "C" fn time<G: Exported>(run: *const c_void) -> f64 {
@@ -412,20 +412,9 @@ unsafe extern "C" fn warnings<G: Exported>(run: *const c_void, sink: *const Text
     }
 }
 
-/// `work`'s answer for a host call: [`DONE`], or [`FAILED`] with its
-/// message (or a panic's) sent to `error`.
+/// `work`'s answer for a host call: [`DONE`] or [`FAILED`].
 fn host_call<E: std::fmt::Display>(error: &TextSink, work: impl FnOnce() -> Result<(), E>) -> i32 {
-    match catch_unwind(AssertUnwindSafe(work)) {
-        Ok(Ok(())) => DONE,
-        Ok(Err(e)) => {
-            error.send(&e.to_string());
-            FAILED
-        }
-        Err(payload) => {
-            error.send(&panic_text(payload));
-            FAILED
-        }
-    }
+    answer(catch_unwind(AssertUnwindSafe(work)), error, |()| DONE, FAILED)
 }
 
 unsafe extern "C" fn set_input<G: Exported>(
@@ -438,6 +427,7 @@ unsafe extern "C" fn set_input<G: Exported>(
     // SAFETY: `run` came from `create::<G>`; `values` holds `len` numbers
     // and `error` is valid, for the call.
     let (run, error) = unsafe { (&mut library_run::<G>(run).run, &*error) };
+    // SAFETY: as above (a null pointer is allowed for no values).
     let values = if len == 0 { &[][..] } else { unsafe { std::slice::from_raw_parts(values, len) } };
     host_call(error, || run.set_input(block, values))
 }

@@ -95,14 +95,20 @@ impl Simulator {
     /// The present value of output `name` (a top-level `outport`).
     pub fn output(&mut self, name: &str) -> Result<&[f64], Diagnostic> {
         let port = self.model.output_port(name)?;
-        Ok(&self.signals_now().map_err(|e| Diagnostic::plain(e.to_string()))?[port.offset..port.offset + port.width])
+        self.port_now(port)
     }
 
     /// The present value of any signal: a recorded name, `block`,
     /// `block.port`, `sub.port` of a subsystem, with `[k]` for one element.
     pub fn signal(&mut self, name: &str) -> Result<&[f64], Diagnostic> {
         let port = self.model.host_signal_port(name)?;
-        Ok(&self.signals_now().map_err(|e| Diagnostic::plain(e.to_string()))?[port.offset..port.offset + port.width])
+        self.port_now(port)
+    }
+
+    /// The values on `port` at the present time.
+    fn port_now(&mut self, port: crate::block::Port) -> Result<&[f64], Diagnostic> {
+        let signals = self.signals_now().map_err(|e| Diagnostic::plain(e.to_string()))?;
+        Ok(&signals[port.offset..port.offset + port.width])
     }
 
     /// The whole signal buffer at the present time (outputs computed if
