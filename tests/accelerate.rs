@@ -24,16 +24,34 @@ fn ctlgraph(args: &[&str], cache: &Path, path: Option<&str>) -> Output {
     cmd.output().unwrap()
 }
 
+/// What `ctlgraph run GRAPH ARGS… ACCELERATE --out DIR/NAME` gives: its
+/// exit code, stdout, stderr and the CSV it wrote.
+struct Ran {
+    code: Option<i32>,
+    stdout: String,
+    stderr: String,
+    csv: Vec<u8>,
+}
+
+fn run_csv(graph: &str, args: &[&str], accelerate: &str, dir: &Path, name: &str) -> Ran {
+    let csv = dir.join(name);
+    let mut all = vec!["run", graph];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--out", csv.to_str().unwrap(), accelerate]);
+    let out = ctlgraph(&all, &cache(), None);
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    Ran { code: out.status.code(), stdout, stderr, csv: std::fs::read(csv).unwrap_or_default() }
+}
+
 /// Runs `graph` interpreted and accelerated (required) and returns both
 /// CSVs and the accelerated run's summary.
 fn both_ways(graph: &str, dir: &Path) -> (Vec<u8>, Vec<u8>, String) {
     let name = graph.replace('/', "_");
-    let (interpreted, accelerated) = (dir.join(format!("{name}.i.csv")), dir.join(format!("{name}.a.csv")));
-    let out = ctlgraph(&["run", graph, "--out", interpreted.to_str().unwrap()], &cache(), None);
-    assert!(out.status.success(), "{graph}: {}", text(&out.stderr));
-    let out = ctlgraph(&["run", graph, "--accelerate=require", "--out", accelerated.to_str().unwrap()], &cache(), None);
-    assert!(out.status.success(), "{graph} accelerated: {}", text(&out.stderr));
-    (std::fs::read(interpreted).unwrap(), std::fs::read(accelerated).unwrap(), text(&out.stdout))
+    let interpreted = run_csv(graph, &[], "--accelerate=off", dir, &format!("{name}.i.csv"));
+    assert_eq!(interpreted.code, Some(0), "{graph}: {}", interpreted.stderr);
+    let accelerated = run_csv(graph, &[], "--accelerate=require", dir, &format!("{name}.a.csv"));
+    assert_eq!(accelerated.code, Some(0), "{graph} accelerated: {}", accelerated.stderr);
+    (interpreted.csv, accelerated.csv, accelerated.stdout)
 }
 
 #[test]
@@ -258,13 +276,8 @@ fn a_step_budget_cuts_an_accelerated_run_where_it_cuts_the_interpreted_one() {
     let dir = tempfile::tempdir().unwrap();
     let graph = "graphs/tutorial/controller_io.yaml";
     let cut = |name: &str, accelerate: &str| {
-        let csv = dir.path().join(name);
-        let out = ctlgraph(
-            &["run", graph, "--max-steps", "1234", "--out", csv.to_str().unwrap(), accelerate],
-            &cache(),
-            None,
-        );
-        (out.status.code(), text(&out.stderr), std::fs::read(csv).unwrap())
+        let ran = run_csv(graph, &["--max-steps", "1234"], accelerate, dir.path(), name);
+        (ran.code, ran.stderr, ran.csv)
     };
     let (interpreted, accelerated) = (cut("i.csv", "--accelerate=off"), cut("a.csv", "--accelerate=require"));
     assert_eq!(interpreted.0, Some(1));
@@ -280,11 +293,9 @@ fn decimated_rows_end_at_the_stop_time_in_the_library_too() {
     let dir = tempfile::tempdir().unwrap();
     let graph = "graphs/mirror-milling/compensation.yaml";
     let csv = |name: &str, accelerate: &str| {
-        let out = dir.path().join(name);
-        let args = ["run", graph, "--stop-time", "0.0107", "--out", out.to_str().unwrap(), accelerate];
-        let done = ctlgraph(&args, &cache(), None);
-        assert!(done.status.success(), "{}", text(&done.stderr));
-        String::from_utf8(std::fs::read(out).unwrap()).unwrap()
+        let ran = run_csv(graph, &["--stop-time", "0.0107"], accelerate, dir.path(), name);
+        assert_eq!(ran.code, Some(0), "{}", ran.stderr);
+        String::from_utf8(ran.csv).unwrap()
     };
     let (interpreted, accelerated) = (csv("i.csv", "--accelerate=off"), csv("a.csv", "--accelerate=require"));
     assert_eq!(interpreted, accelerated);
