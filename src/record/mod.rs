@@ -2,27 +2,13 @@
 //! or not at all, and atomic writes for plots and reports. (Recording
 //! itself lives in `ctlgraph_core::trace`.)
 
+mod number;
+
 pub use ctlgraph_core::trace::{Recorder, Trace};
+pub use number::{Number, push_number};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
-
-/// A number as CSV files show it: Rust's `Display` and `LowerExp` for f64
-/// print the shortest text that reads back to the same number, so values
-/// survive the round trip; very small or large magnitudes use the exponent
-/// form.
-pub struct Number(pub f64);
-
-impl std::fmt::Display for Number {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let v = self.0;
-        if v == 0.0 || (1e-4..1e15).contains(&v.abs()) || !v.is_finite() {
-            write!(f, "{v}")
-        } else {
-            write!(f, "{v:e}")
-        }
-    }
-}
 
 /// A CSV file written to a temporary name beside its destination and
 /// renamed into place by [`CsvFile::commit`]; dropped uncommitted, it
@@ -32,6 +18,7 @@ pub struct CsvFile {
     tmp: PathBuf,
     writer: Option<BufWriter<File>>,
     error: Option<std::io::Error>,
+    rows: CsvRows,
 }
 
 impl CsvFile {
@@ -41,7 +28,7 @@ impl CsvFile {
         let mut writer = BufWriter::with_capacity(1 << 16, File::create(&tmp)?);
         let header: Vec<String> = headers.iter().map(|h| quote(h)).collect();
         writeln!(writer, "{}", header.join(","))?;
-        Ok(CsvFile { dest: dest.to_path_buf(), tmp, writer: Some(writer), error: None })
+        Ok(CsvFile { dest: dest.to_path_buf(), tmp, writer: Some(writer), error: None, rows: CsvRows::default() })
     }
 
     /// Appends a row of numbers in [`Number`] form.
@@ -49,12 +36,7 @@ impl CsvFile {
         let (Some(w), None) = (self.writer.as_mut(), &self.error) else {
             return;
         };
-        let mut result = Ok(());
-        for (i, &v) in row.iter().enumerate() {
-            let sep = if i == 0 { "" } else { "," };
-            result = result.and_then(|_| write!(w, "{sep}{}", Number(v)));
-        }
-        if let Err(e) = result.and_then(|_| w.write_all(b"\n")) {
+        if let Err(e) = w.write_all(self.rows.line(row.iter().copied())) {
             self.error = Some(e);
         }
     }
@@ -214,10 +196,67 @@ pub fn units_path(data: &Path) -> std::path::PathBuf {
 pub fn trace_csv(trace: &Trace) -> String {
     let mut text = trace.headers.join(",");
     text.push('\n');
+    let mut rows = CsvRows::default();
     for k in 0..trace.t().len() {
-        let row: Vec<String> = trace.columns.iter().map(|c| Number(c[k]).to_string()).collect();
-        text.push_str(&row.join(","));
-        text.push('\n');
+        // Only ASCII is written.
+        text.push_str(&String::from_utf8_lossy(rows.line(trace.columns.iter().map(|c| c[k]))));
     }
     text
+}
+
+/// Rows of numbers as CSV lines in [`Number`] form. A column whose value
+/// repeats the row above's (a reference, a step, a sample held between
+/// slower hits) copies that row's text instead of formatting it again.
+#[derive(Default)]
+struct CsvRows {
+    line: Vec<u8>,
+    previous: Vec<u8>,
+    /// Per column of the previous row: the value's bits and where its text
+    /// is in `previous`.
+    fields: Vec<(u64, usize, usize)>,
+}
+
+impl CsvRows {
+    /// `row` as a line of CSV, with its newline.
+    fn line(&mut self, row: impl IntoIterator<Item = f64>) -> &[u8] {
+        std::mem::swap(&mut self.line, &mut self.previous);
+        self.line.clear();
+        let mut width = 0;
+        for (i, v) in row.into_iter().enumerate() {
+            if i > 0 {
+                self.line.push(b',');
+            }
+            let start = self.line.len();
+            match self.fields.get(i) {
+                Some(&(bits, from, to)) if bits == v.to_bits() => self.line.extend_from_slice(&self.previous[from..to]),
+                _ => push_number(&mut self.line, v),
+            }
+            let field = (v.to_bits(), start, self.line.len());
+            match self.fields.get_mut(i) {
+                Some(f) => *f = field,
+                None => self.fields.push(field),
+            }
+            width = i + 1;
+        }
+        self.fields.truncate(width);
+        self.line.push(b'\n');
+        &self.line
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::CsvRows;
+
+    #[test]
+    fn a_repeated_value_reads_as_when_it_was_first_written() {
+        let mut rows = CsvRows::default();
+        let lines: Vec<String> = [[0.0, 1.5, -0.0], [1e-5, 1.5, f64::NAN], [2e-5, 2.5, f64::NAN], [3e-5, 2.5, -0.0]]
+            .iter()
+            .map(|row| String::from_utf8_lossy(rows.line(row.iter().copied())).into_owned())
+            .collect();
+        assert_eq!(lines, ["0,1.5,-0\n", "1e-5,1.5,NaN\n", "2e-5,2.5,NaN\n", "3e-5,2.5,-0\n"]);
+        assert_eq!(rows.line([7.0]), b"7\n", "a shorter row");
+        assert_eq!(rows.line([7.0, 7.0]), b"7,7\n", "a longer row");
+    }
 }
