@@ -268,11 +268,8 @@ unsafe fn prepare<G: Exported>(spec: &Spec) -> Result<LibraryRun<G>, String> {
         // SAFETY: as above.
         sets.push(unsafe { (pair[0].text()?.to_string(), pair[1].text()?.to_string()) });
     }
-    let mut flat = crate::load_str(text, file.into(), &sets).map_err(|d| d.to_string())?;
-    if spec.has_seed {
-        flat.sim.seed = spec.seed;
-    }
-    let model = crate::compile(&flat, &G::registry()).map_err(|d| d.to_string())?;
+    let seed = spec.has_seed.then_some(spec.seed);
+    let model = super::template::compile_case(text, file, &sets, seed, &G::registry())?;
     let run = Compiled::<G>::new(&model, (!spec.stop.is_nan()).then_some(spec.stop))?;
     Ok(LibraryRun { run, recorder: Recorder::new(&model), rows: Vec::new() })
 }

@@ -22,6 +22,7 @@ pub mod c;
 mod driver;
 mod emit;
 pub mod export;
+mod template;
 
 use crate::compile::Model;
 pub use crate::sim::earlier;
