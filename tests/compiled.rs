@@ -77,6 +77,33 @@ fn generated_time_keeping_equals_the_interpreters_on_and_off_the_grid() {
     }
 }
 
+/// Formulas written in place (`fcn`: every operation and function of the
+/// expression language, the time, dopri5's minor steps) compute what the
+/// interpreter's program does, with the graph's values and with others on
+/// the same step: it reads the values from the blocks, so their sweep is
+/// one build. A formula of another shape is another structure.
+#[test]
+fn formulas_written_in_place_equal_the_interpreters_for_any_values() {
+    const PATH: &str = "compiled/graphs/formulas.yaml";
+    let (_, trace) = GENERATED.iter().find(|(p, _)| *p == PATH).unwrap();
+    let compile = |sets: &[(&str, &str)]| {
+        let sets: Vec<(String, String)> = sets.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+        compile_file(Path::new(PATH), &sets).unwrap()
+    };
+    let others = [("a", "-3"), ("b", "0.125"), ("w", "40")];
+    for sets in [&[][..], &others] {
+        let got = trace(&compile(sets), usize::MAX).unwrap();
+        assert!(got.len() > 100, "{sets:?}: the whole run");
+        assert_same(&format!("{PATH} {sets:?}"), &got, &interpreted_with(compile(sets)));
+    }
+    let fingerprint = ctlgraph_core::codegen::fingerprint;
+    assert_eq!(fingerprint(&compile(&[])), fingerprint(&compile(&others)));
+    let reshaped = std::fs::read_to_string(PATH).unwrap().replace("a*u1 - ", "a + u1 - ");
+    let flat = ctlgraph_core::load_str(&reshaped, PATH.into(), &[]).unwrap();
+    let reshaped = ctlgraph::compile_flat(&flat, &ctlgraph::registry()).unwrap();
+    assert_ne!(fingerprint(&compile(&[])), fingerprint(&reshaped));
+}
+
 #[test]
 fn a_generated_step_whose_signal_overflows_stops_as_the_interpreter_does_and_stays_stopped() {
     const PATH: &str = "compiled/graphs/clocks.yaml";
@@ -122,6 +149,7 @@ fn every_bundled_graph_is_generated() {
         "graphs/tutorial/controller_io.yaml",
         "graphs/events/antiwindup_dead_time.yaml",
         "compiled/graphs/rows.yaml",
+        "compiled/graphs/formulas.yaml",
     ] {
         assert!(generated.contains(&path), "{path} has no generated step");
     }

@@ -290,6 +290,14 @@ pub trait Block: std::any::Any + Send + Sync + dyn_clone::DynClone {
         None
     }
 
+    /// The formula `output` computes, if it is one: its one scalar output
+    /// from its scalar inputs (variable slots 0 … n − 1) and the time (slot
+    /// n), with no state. A generated step writes it in place
+    /// ([`crate::expr::Expr::to_rust`]) instead of calling `output`.
+    fn formula(&self) -> Option<&crate::expr::Expr> {
+        None
+    }
+
     /// `Some` when the outputs are a function of time alone (no inputs,
     /// states or memory that changes): the scheduler then calls `output`
     /// once per time and keeps its outputs while it is asked again at that

@@ -30,6 +30,9 @@ impl Block for Fcn {
         let v = self.expr.eval(&self.vars);
         io.set(0, v);
     }
+    fn formula(&self) -> Option<&Expr> {
+        Some(&self.expr)
+    }
     fn c_form(&self, c: &mut CBlock) -> Result<(), NoCForm> {
         let n = self.vars.len() - 1;
         let mut vars: Vec<String> = (0..n).map(|i| c.u(i).to_string()).collect();

@@ -30,7 +30,9 @@ struct Visit {
     /// Runs when the sweep runs every block (first pass, events) only.
     event_only: bool,
     inline: Option<Inline>,
-    /// The first of its kernel's constants in `Step::k`.
+    /// Its output as Rust, when it is a formula ([`crate::Block::formula`]).
+    formula: Option<Formula>,
+    /// The first of its kernel's or formula's constants in `Step::k`.
     constants: usize,
     states: std::ops::Range<usize>,
     updates: bool,
@@ -54,12 +56,15 @@ impl<'m> Gen<'m> {
             .map(|i| {
                 let inline = Inline::of(model, i);
                 let constants = n_constants;
-                n_constants += inline.map_or(0, |k| constants_of(k.kernel));
+                let formula = inline.is_none().then(|| Formula::of(model, i, constants)).flatten();
+                n_constants +=
+                    inline.map_or(0, |k| constants_of(k.kernel)) + formula.as_ref().map_or(0, |f| f.constants);
                 Visit {
                     index: i,
                     rate: model.slots[i].rate,
                     event_only: model.between.event_only[i],
                     inline,
+                    formula,
                     constants,
                     states: model.slots[i].states.clone(),
                     updates: model.blocks[i].updates(),
@@ -76,7 +81,7 @@ impl<'m> Gen<'m> {
         let list = |ports: &[Port]| {
             ports.iter().map(|p| format!("Port {{ offset: {}, width: {} }}", p.offset, p.width)).collect::<Vec<_>>()
         };
-        for v in self.visits.iter().filter(|v| v.inline.is_none() || v.updates) {
+        for v in self.visits.iter().filter(|v| (v.inline.is_none() && v.formula.is_none()) || v.updates) {
             let slot = &self.model.slots[v.index];
             for (kind, ports) in [
                 ("IN", &self.model.in_ports[slot.inputs.clone()]),
@@ -94,7 +99,7 @@ impl<'m> Gen<'m> {
         out.push_str("/// The graph's blocks, signals and held transitions.\n#[derive(Clone)]\npub struct Step {\n");
         let _ = writeln!(out, "    s: Box<[f64; {}]>,", m.signal_len);
         if self.n_constants > 0 {
-            let _ = writeln!(out, "    /// The kernels' constants.\n    k: [f64; {}],", self.n_constants);
+            let _ = writeln!(out, "    /// The kernels' and formulas' constants.\n    k: [f64; {}],", self.n_constants);
         }
         for v in &self.visits {
             let meta = &m.meta[v.index];
@@ -148,6 +153,10 @@ impl<'m> Gen<'m> {
             let _ = writeln!(out, "        let mut k = [0.0; {}];", self.n_constants);
         }
         for v in &self.visits {
+            if let Some(f) = v.formula.as_ref().filter(|f| f.constants > 0) {
+                let (a, b) = (v.constants, v.constants + f.constants);
+                let _ = writeln!(out, "        cg::formula_constants(model, {}, &mut k[{a}..{b}])?;", v.index);
+            }
             let Some(inline) = v.inline else { continue };
             let (pattern, stores) = match inline.kernel {
                 Kernel::Scale(_) => ("Kernel::Scale(a)", format!("k[{}] = a", v.constants)),
@@ -259,7 +268,10 @@ impl<'m> Gen<'m> {
                     k.u1
                 ),
             },
-            None => format!("self.b{i}.output(&mut {});", self.io(i, left, minor)),
+            None => match &v.formula {
+                Some(f) => format!("s[{}] = {};", f.y, f.code),
+                None => format!("self.b{i}.output(&mut {});", self.io(i, left, minor)),
+            },
         }
     }
 
@@ -535,6 +547,34 @@ fn fix_states(out: &mut String, writable: bool, n: usize) {
 /// (store-forwarding stall: a quarter of the PID loop's stage time).
 fn bind_signals(out: &mut String) {
     out.push_str("        let s = &mut *self.s;\n");
+}
+
+/// A block whose output is a formula of its inputs and t, written in
+/// place: the signals it reads, its constants in `Step::k`.
+struct Formula {
+    /// Where its output goes in the signals.
+    y: usize,
+    /// Its value as Rust ([`crate::expr::Expr::to_rust`]).
+    code: String,
+    /// How many of `Step::k` its constants take, from `first`.
+    constants: usize,
+}
+
+impl Formula {
+    /// Block `i`'s formula, its constants from `Step::k[first]` on.
+    fn of(model: &Model, i: usize, first: usize) -> Option<Formula> {
+        let expr = model.blocks[i].formula()?;
+        let slot = &model.slots[i];
+        let inputs = &model.in_ports[slot.inputs.clone()];
+        let y = model.out_ports[slot.outputs.clone()].first()?;
+        if y.width != 1 || inputs.iter().any(|p| p.width != 1) {
+            return None;
+        }
+        let mut vars: Vec<String> = inputs.iter().map(|p| format!("s[{}]", p.offset)).collect();
+        vars.push("t".into());
+        let code = expr.to_rust(&vars, &|j| format!("self.k[{}]", first + j));
+        Some(Formula { y: y.offset, code, constants: expr.constants().len() })
+    }
 }
 
 /// How many of `Step::k` a kernel's constants take.

@@ -29,8 +29,8 @@ pub use crate::sim::earlier;
 pub use crate::sim::not_finite_bits;
 pub use ctlgraph_solver::{Zoh, ZohSingleInput};
 pub use driver::{
-    Compiled, CompiledSnapshot, GeneratedStep, fixed, fixed_mut, kernel, mismatch, transition, transition_single_input,
-    zeros,
+    Compiled, CompiledSnapshot, GeneratedStep, fixed, fixed_mut, formula_constants, kernel, mismatch, transition,
+    transition_single_input, zeros,
 };
 
 /// The module for `model`: a `Step` type implementing [`GeneratedStep`].

@@ -16,6 +16,7 @@
 //! evaluation does no lookups and allocates nothing.
 
 mod c;
+mod rust;
 
 use std::fmt;
 
@@ -231,18 +232,22 @@ fn apply_func1(f: Func1, a: f64) -> f64 {
         Func1::Cosh => a.cosh(),
         Func1::Tanh => a.tanh(),
         Func1::Abs => a.abs(),
-        // sign(0) = 0, as in MATLAB (f64::signum gives 1).
-        Func1::Sign => {
-            if a > 0.0 {
-                1.0
-            } else if a < 0.0 {
-                -1.0
-            } else {
-                0.0
-            }
-        }
+        Func1::Sign => sign(a),
         Func1::Floor => a.floor(),
         Func1::Ceil => a.ceil(),
+    }
+}
+
+/// The expression language's `sign`: sign(0) = 0 as in MATLAB
+/// (`f64::signum` gives 1), and sign(NaN) = 0.
+#[inline]
+pub fn sign(a: f64) -> f64 {
+    if a > 0.0 {
+        1.0
+    } else if a < 0.0 {
+        -1.0
+    } else {
+        0.0
     }
 }
 
