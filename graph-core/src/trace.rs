@@ -40,6 +40,12 @@ pub fn record(
     Ok(trace)
 }
 
+/// Where each recorded value is in the signal buffer, element by element,
+/// in the order of a row after its time.
+pub fn gather_offsets(model: &Model) -> Vec<usize> {
+    model.columns.iter().flat_map(|c| c.offset..c.offset + c.width).collect()
+}
+
 /// Turns signal buffers into rows `[t, col1, col2, …]`, every `every`-th
 /// major step plus the last one. Allocates only in `new`.
 #[derive(Clone)]
@@ -58,7 +64,7 @@ pub struct Recorder {
 
 impl Recorder {
     pub fn new(model: &Model) -> Self {
-        let gather: Vec<usize> = model.columns.iter().flat_map(|c| c.offset..c.offset + c.width).collect();
+        let gather = gather_offsets(model);
         Recorder {
             every: model.record_every.max(1),
             skip: 0,
@@ -84,12 +90,19 @@ impl Recorder {
     }
 
     /// [`Recorder::sample`] appending the row to `rows` (rows one after
-    /// another), without staging it: what an accelerated run records.
+    /// another), without staging it, by `write_row` — the gather of
+    /// [`gather_offsets`] as a generated step writes it, with constant
+    /// offsets: what an accelerated run records.
     #[inline]
-    pub fn sample_onto(&mut self, t: f64, signals: &[f64], rows: &mut Vec<f64>) {
+    pub fn sample_onto(
+        &mut self,
+        t: f64,
+        signals: &[f64],
+        rows: &mut Vec<f64>,
+        write_row: impl FnOnce(f64, &[f64], &mut Vec<f64>),
+    ) {
         if self.due() {
-            rows.push(t);
-            rows.extend(self.gather.iter().map(|&i| signals[i]));
+            write_row(t, signals, rows);
         } else {
             // Kept for `flush`, should this be the last step.
             self.fill(t, signals);

@@ -43,6 +43,9 @@ pub trait GeneratedStep: Sized + Clone {
     fn row_outputs(&mut self, t: f64, left: bool, x: &[f64]);
     /// Held LTI block `j`'s latched input.
     fn held_input(&self, j: usize) -> &[f64];
+    /// Appends a recorded row — t, then the signals at
+    /// [`crate::trace::gather_offsets`], written as constants — to `rows`.
+    fn record_row(t: f64, signals: &[f64], rows: &mut Vec<f64>);
     /// Watched block `b`'s zero-crossing functions at (t, x), outputs
     /// computed: at a major step (`major`), or in a stage (modes frozen
     /// as [`GeneratedStep::freeze`] set them). The watched blocks are

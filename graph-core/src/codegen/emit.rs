@@ -138,6 +138,7 @@ impl<'m> Gen<'m> {
         self.held(out);
         self.derivatives(out);
         self.rows(out);
+        self.record(out);
         self.left_limits(out);
         self.clamp_states(out);
         self.next_event(out);
@@ -378,6 +379,22 @@ impl<'m> Gen<'m> {
             let _ = writeln!(out, "            {j} => &self.u{j},");
         }
         out.push_str("            _ => &[],\n        }\n    }\n\n");
+    }
+
+    /// A recorded row with the record list's offsets as constants: the
+    /// Recorder's gather loop, bounds checks and all, is most of what
+    /// recording costs a small step.
+    fn record(&self, out: &mut String) {
+        let gather = crate::trace::gather_offsets(self.model);
+        let values: Vec<String> =
+            std::iter::once("t".to_string()).chain(gather.iter().map(|i| format!("s[{i}]"))).collect();
+        let _ = write!(
+            out,
+            "    #[inline(always)]\n    fn record_row(t: f64, signals: &[f64], rows: &mut Vec<f64>) {{\n        \
+             let s: &[f64; {}] = cg::fixed(signals);\n        rows.extend_from_slice(&[{}]);\n    }}\n\n",
+            self.model.signal_len,
+            values.join(", ")
+        );
     }
 
     /// The minor step's output sweep, `left` the left-limit flag's expression.

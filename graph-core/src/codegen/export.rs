@@ -336,7 +336,7 @@ unsafe extern "C" fn run_rows<G: Exported>(
     let result = catch_unwind(AssertUnwindSafe(|| {
         let (mut steps, mut go_on) = (0u64, true);
         let outcome = run.run_while(|t, signals| {
-            recorder.sample_onto(t, signals, pending);
+            recorder.sample_onto(t, signals, pending, G::record_row);
             steps += 1;
             if pending.len() >= full {
                 go_on = hand_over(rows, ctx, pending, width);
