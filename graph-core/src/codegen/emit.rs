@@ -573,7 +573,8 @@ struct Formula {
     y: usize,
     /// Its value as Rust ([`crate::expr::Expr::to_rust`]).
     code: String,
-    /// How many of `Step::k` its constants take, from `first`.
+    /// How many of `Step::k` its constants take (from its visit's
+    /// `constants` on).
     constants: usize,
 }
 
