@@ -210,10 +210,13 @@ impl AcceleratedRun {
 
     /// [`ctlgraph_core::Simulator::run_while`], in the library. A panic in
     /// `sink` is carried over the library and resumed here.
-    pub fn run_while(&mut self, sink: &mut dyn FnMut(f64, &[f64]) -> bool) -> Result<bool, SimError> {
+    pub fn run_while<S>(&mut self, sink: &mut S) -> Result<bool, SimError>
+    where
+        S: FnMut(f64, &[f64]) -> bool + ?Sized,
+    {
         let run_while = self.lib.api.run_while;
-        // SAFETY: as `run_guarded` promises.
-        self.run_guarded(sink, |run, ctx, error| unsafe { run_while(run, sample, ctx, error) })
+        // SAFETY: as `run_guarded` promises; `sample::<S>` reads a `Guarded<S>`.
+        self.run_guarded(sink, |run, ctx, error| unsafe { run_while(run, sample::<S>, ctx, error) })
     }
 
     /// Runs to the stop time recording in the library, as
@@ -280,7 +283,6 @@ impl<S: ?Sized> Guarded<'_, S> {
 }
 
 type RowsSink = dyn FnMut(&[f64], usize) -> bool;
-type SampleSink = dyn FnMut(f64, &[f64]) -> bool;
 
 unsafe extern "C" fn rows(ctx: *mut c_void, values: *const f64, n: usize, width: usize) -> bool {
     // SAFETY: `ctx` is the `Guarded` of the `run_rows` call in progress.
@@ -290,9 +292,15 @@ unsafe extern "C" fn rows(ctx: *mut c_void, values: *const f64, n: usize, width:
     guarded.call(|sink| sink(values, width))
 }
 
-unsafe extern "C" fn sample(ctx: *mut c_void, t: f64, signals: *const f64, len: usize) -> bool {
-    // SAFETY: `ctx` is the `Guarded` of the `run_while` call in progress.
-    let guarded = unsafe { &mut *ctx.cast::<Guarded<SampleSink>>() };
+/// The trampoline for a sink of type `S`, one per type: the sink's code
+/// is inlined into it, so a major step costs the library one call, not a
+/// call and then a `dyn` call.
+unsafe extern "C" fn sample<S>(ctx: *mut c_void, t: f64, signals: *const f64, len: usize) -> bool
+where
+    S: FnMut(f64, &[f64]) -> bool + ?Sized,
+{
+    // SAFETY: `ctx` is the `Guarded<S>` of the `run_while` call in progress.
+    let guarded = unsafe { &mut *ctx.cast::<Guarded<S>>() };
     // SAFETY: the library passes its signal buffer for the call.
     let signals = unsafe { std::slice::from_raw_parts(signals, len) };
     guarded.call(|sink| sink(t, signals))
