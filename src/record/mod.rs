@@ -5,7 +5,8 @@
 mod number;
 
 pub use ctlgraph_core::trace::{Recorder, Trace};
-pub use number::{Number, push_number};
+pub use number::Number;
+use number::push_number;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};

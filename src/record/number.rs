@@ -27,10 +27,10 @@ impl std::fmt::Display for Number {
 
 /// The longest text [`push_number`] writes: a sign, 17 significant digits
 /// and, at most, "0.000" before them or a point and "e-324" around them.
-pub const MAX_LEN: usize = 25;
+pub(super) const MAX_LEN: usize = 25;
 
 /// Appends `v`'s text (the module's doc) to `out`.
-pub fn push_number(out: &mut Vec<u8>, v: f64) {
+pub(super) fn push_number(out: &mut Vec<u8>, v: f64) {
     if v == 0.0 || !v.is_finite() {
         // Rust's spellings: "0", "-0", "NaN", "inf", "-inf".
         let text = match v {
