@@ -176,6 +176,68 @@ fn the_graph_file_can_ask_for_acceleration_and_the_report_records_it() {
     );
 }
 
+/// Runs of one graph in one process: the library builds the second and
+/// later ones on the structure of the graph it compiled first (other
+/// values, other seeds), and a graph whose own values do not compile —
+/// an override makes it valid — case by case from its text. Each run's
+/// trace is the interpreter's, to the bit.
+#[test]
+fn runs_after_the_first_are_built_on_the_kept_structure_and_equal_the_interpreters() {
+    cache_in_process();
+    const GRAPH: &str = "name: kept structure
+parameters: { z: 2.0, w: 3.0 }
+simulation: { stop: 0.5, seed: 4, solver: { method: rk4, step: 0.001 } }
+blocks:
+  wave:  { type: sine, frequency: w }
+  noise: { type: uniform_noise, sample_time: 0.01 }
+  k:     { type: gain, k: 1/z }
+  sum:   { type: sum, signs: \"++\" }
+  f:     { type: fcn, expr: \"z*u^2 - w\" }
+  x:     { type: integrator }
+wires:
+  - wave -> sum.u1
+  - noise -> sum.u2
+  - sum -> k
+  - k -> f
+  - f -> x
+record: [sum, k, f, x]
+";
+    let file = Path::new("kept_structure.yaml");
+    let sets = |pairs: &[(&str, &str)]| -> Vec<(String, String)> {
+        pairs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()
+    };
+    let same = |text: &str, runner: &Runner, pairs: &[(&str, &str)], seed: Option<u64>| {
+        let sets = sets(pairs);
+        let model = || ctlgraph::compile_str(text, file.to_str().unwrap(), &sets).unwrap();
+        let mut seeded = model();
+        if let Some(s) = seed {
+            seeded =
+                ctlgraph::compile_str(&text.replace("seed: 4", &format!("seed: {s}")), file.to_str().unwrap(), &sets)
+                    .unwrap();
+        }
+        let (fast, _) = runner.simulate(model(), &sets, seed, None).unwrap();
+        let (slow, _) = ctlgraph_core::trace::simulate_with_stats(seeded, None).unwrap();
+        let bits = |t: &ctlgraph::record::Trace| {
+            t.columns.iter().flat_map(|c| c.iter().map(|v| v.to_bits())).collect::<Vec<_>>()
+        };
+        assert!(slow.t().len() > 400, "{pairs:?}: the whole run");
+        assert_eq!(bits(&fast), bits(&slow), "{pairs:?}, seed {seed:?}");
+    };
+    let model = ctlgraph::compile_str(GRAPH, file.to_str().unwrap(), &[]).unwrap();
+    let (runner, _) = Runner::choose(Accelerate::Require, &model, file, GRAPH).unwrap();
+    same(GRAPH, &runner, &[], None);
+    same(GRAPH, &runner, &[("z", "5"), ("w", "7.5")], None);
+    same(GRAPH, &runner, &[("z", "0.5")], Some(11));
+    same(GRAPH, &runner, &[], None);
+    // z = 0 makes the gain infinite: the graph compiles only with an override.
+    let broken = GRAPH.replace("z: 2.0", "z: 0.0");
+    assert!(ctlgraph::compile_str(&broken, file.to_str().unwrap(), &[]).is_err());
+    let model = ctlgraph::compile_str(&broken, file.to_str().unwrap(), &sets(&[("z", "2")])).unwrap();
+    let (runner, _) = Runner::choose(Accelerate::Require, &model, file, &broken).unwrap();
+    same(&broken, &runner, &[("z", "2")], None);
+    same(&broken, &runner, &[("z", "3"), ("w", "1")], None);
+}
+
 /// Points this process's accelerated runs at the tests' cache. Every test
 /// here uses that one cache (the subprocesses are told it explicitly), and
 /// std orders `set_var` with its own reads of the environment.
