@@ -52,6 +52,9 @@ fn fmu_binary(features: Features) -> Result<(Vec<u8>, Cost), String> {
     let dir = toolchain::cache_dir()?;
     let key = toolchain::fmu_key(features);
     let path = toolchain::library_path(&dir, &key);
+    if path.is_file() {
+        toolchain::mark_used(&path);
+    }
     let built = !path.is_file();
     if built {
         toolchain::build_fmu(&dir, &key, features).map_err(|e| format!("the FMU binary: {e}"))?;

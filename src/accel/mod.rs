@@ -58,8 +58,14 @@ pub fn library(model: &Model) -> Result<(Arc<Library>, Cost), String> {
     let key = toolchain::key(&code, features);
     let path = toolchain::library_path(&dir, &key);
     if path.is_file() {
-        let lib = Library::open(&path, fingerprint)?;
-        return Ok((lib, Cost::Loaded(start.elapsed().as_secs_f64())));
+        // Marked first: another ctlgraph's prune leaves it alone from now on.
+        toolchain::mark_used(&path);
+        match Library::open(&path, fingerprint) {
+            Ok(lib) => return Ok((lib, Cost::Loaded(start.elapsed().as_secs_f64()))),
+            // Removed by another ctlgraph's prune just before: built again.
+            Err(_) if !path.is_file() => {}
+            Err(e) => return Err(e),
+        }
     }
     toolchain::build(&dir, &key, &code, features)?;
     let lib = Library::open(&path, fingerprint)?;

@@ -15,8 +15,14 @@
 //! - `target/`: one cargo target directory for all of them, so ctlgraph's
 //!   crates and their dependencies are compiled once (the first build on a
 //!   machine) and each later library compiles only its own crate.
+//!
+//! The libraries beyond the 64 used last are removed after each build
+//! (`prune.rs`).
 
+mod prune;
 pub mod source;
+
+pub use prune::mark_used;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -176,6 +182,7 @@ fn build_crate(dir: &Path, key: &str, name: &str, dependencies: &str, files: &[(
     let partial = lib_dir.join(format!(".{key}.{}.partial", std::process::id()));
     std::fs::copy(&built, &partial).map_err(io(&partial))?;
     std::fs::rename(&partial, &dest).map_err(io(&dest))?;
+    prune::prune(dir, std::time::SystemTime::now());
     Ok(())
 }
 
