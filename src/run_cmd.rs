@@ -174,8 +174,12 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
         // per batch, the step budget in the library.
         Some(run) => {
             let result = run.run_rows(max_steps, ROWS_PER_BATCH, &mut |rows, width| {
-                for row in rows.chunks_exact(width) {
-                    emit(row);
+                // Column by column into the trace, row by row into the CSV.
+                if let Some(c) = csv.as_mut() {
+                    rows.chunks_exact(width).for_each(|row| c.write_row(row));
+                }
+                if let Some(tr) = trace.as_mut() {
+                    tr.push_rows(rows, width);
                 }
                 last_step = rows.get(rows.len().saturating_sub(width)).copied().unwrap_or(last_step);
                 progress.tick(last_step);
