@@ -179,6 +179,9 @@ impl Trace {
     pub fn push_rows(&mut self, rows: &[f64], width: usize) {
         // Rows of exactly `width`: an iterator of known length, so each
         // column is reserved once and filled without a check per value.
+        if width == 0 {
+            return;
+        }
         for (c, column) in self.columns.iter_mut().enumerate().take(width) {
             column.extend(rows.chunks_exact(width).map(|row| row[c]));
         }
