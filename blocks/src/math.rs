@@ -155,16 +155,9 @@ fn build_abs(p: &mut Params) -> Result<Built, Diagnostic> {
     .build(p)
 }
 
-/// sign(0) = 0, as MATLAB.
-pub fn sign(v: f64) -> f64 {
-    if v > 0.0 {
-        1.0
-    } else if v < 0.0 {
-        -1.0
-    } else {
-        0.0
-    }
-}
+/// sign(0) = 0, as MATLAB: the expression language's, so a block and an
+/// `fcn` formula agree.
+pub use ctlgraph_core::expr::sign;
 
 fn build_sign(p: &mut Params) -> Result<Built, Diagnostic> {
     Piecewise::new(

@@ -7,7 +7,7 @@
 //! value a sweep or `--set` gives them, and the code (and its
 //! fingerprint) depends on the formula's shape alone.
 
-use super::{Expr, Func1, Node, Op};
+use super::{Expr, FUNC1, Func1, Node, Op};
 
 impl Expr {
     /// The Rust expression, with variable slot i written `vars[i]` and
@@ -85,25 +85,8 @@ fn node(n: &Node, vars: &[String], constant: &dyn Fn(usize) -> String, next: &mu
         }
         Node::Call(Func1::Sign, a) => format!("::ctlgraph_core::expr::sign({})", bare(sub(a))),
         Node::Call(f, a) => {
-            let name = match f {
-                Func1::Sqrt => "sqrt",
-                Func1::Exp => "exp",
-                Func1::Ln => "ln",
-                Func1::Log10 => "log10",
-                Func1::Sin => "sin",
-                Func1::Cos => "cos",
-                Func1::Tan => "tan",
-                Func1::Asin => "asin",
-                Func1::Acos => "acos",
-                Func1::Atan => "atan",
-                Func1::Sinh => "sinh",
-                Func1::Cosh => "cosh",
-                Func1::Tanh => "tanh",
-                Func1::Abs => "abs",
-                Func1::Floor => "floor",
-                Func1::Ceil => "ceil",
-                Func1::Sign => unreachable!("matched above"),
-            };
+            // The language's names are the `f64` methods' (sign excepted).
+            let name = FUNC1.iter().find(|(_, g)| g == f).map_or("", |(name, _)| name);
             format!("f64::{name}({})", bare(sub(a)))
         }
         Node::Atan2(a, b) => {
