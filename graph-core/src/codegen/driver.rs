@@ -80,19 +80,6 @@ pub fn kernel(model: &Model, index: usize) -> Option<Kernel> {
     model.blocks.get(index)?.kernel()
 }
 
-/// Block `index`'s formula constants ([`crate::expr::Expr::constants`])
-/// into `k`, which has room for exactly as many.
-pub fn formula_constants(model: &Model, index: usize, k: &mut [f64]) -> Result<(), String> {
-    let constants = model.blocks.get(index).and_then(|b| b.formula()).map(|f| f.constants());
-    match constants {
-        Some(c) if c.len() == k.len() => {
-            k.copy_from_slice(&c);
-            Ok(())
-        }
-        _ => Err(mismatch(model, index)),
-    }
-}
-
 /// The exact transition of the model's LTI block `index`.
 pub fn transition(model: &Model, index: usize) -> Result<Zoh, String> {
     let lti = model.blocks.get(index).and_then(|b| b.lti()).ok_or_else(|| mismatch(model, index))?;

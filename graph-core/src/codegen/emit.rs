@@ -2,6 +2,7 @@
 //! unrolled over one model's execution order, each block visit a direct
 //! call with constant ports.
 
+use super::formula::Formula;
 use crate::block::{Kernel, Port};
 use crate::compile::{Model, Rate};
 use crate::sim::visit::Inline;
@@ -564,35 +565,6 @@ fn fix_states(out: &mut String, writable: bool, n: usize) {
 /// (store-forwarding stall: a quarter of the PID loop's stage time).
 fn bind_signals(out: &mut String) {
     out.push_str("        let s = &mut *self.s;\n");
-}
-
-/// A block whose output is a formula of its inputs and t, written in
-/// place: the signals it reads, its constants in `Step::k`.
-struct Formula {
-    /// Where its output goes in the signals.
-    y: usize,
-    /// Its value as Rust ([`crate::expr::Expr::to_rust`]).
-    code: String,
-    /// How many of `Step::k` its constants take (from its visit's
-    /// `constants` on).
-    constants: usize,
-}
-
-impl Formula {
-    /// Block `i`'s formula, its constants from `Step::k[first]` on.
-    fn of(model: &Model, i: usize, first: usize) -> Option<Formula> {
-        let expr = model.blocks[i].formula()?;
-        let slot = &model.slots[i];
-        let inputs = &model.in_ports[slot.inputs.clone()];
-        let y = model.out_ports[slot.outputs.clone()].first()?;
-        if y.width != 1 || inputs.iter().any(|p| p.width != 1) {
-            return None;
-        }
-        let mut vars: Vec<String> = inputs.iter().map(|p| format!("s[{}]", p.offset)).collect();
-        vars.push("t".into());
-        let code = expr.to_rust(&vars, &|j| format!("self.k[{}]", first + j));
-        Some(Formula { y: y.offset, code, constants: expr.constants().len() })
-    }
 }
 
 /// How many of `Step::k` a kernel's constants take.

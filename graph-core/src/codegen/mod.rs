@@ -22,6 +22,7 @@ pub mod c;
 mod driver;
 mod emit;
 pub mod export;
+mod formula;
 mod template;
 
 use crate::compile::Model;
@@ -29,9 +30,10 @@ pub use crate::sim::earlier;
 pub use crate::sim::not_finite_bits;
 pub use ctlgraph_solver::{Zoh, ZohSingleInput};
 pub use driver::{
-    Compiled, CompiledSnapshot, GeneratedStep, fixed, fixed_mut, formula_constants, kernel, mismatch, transition,
-    transition_single_input, zeros,
+    Compiled, CompiledSnapshot, GeneratedStep, fixed, fixed_mut, kernel, mismatch, transition, transition_single_input,
+    zeros,
 };
+pub use formula::formula_constants;
 
 /// The module for `model`: a `Step` type implementing [`GeneratedStep`].
 pub fn generate(model: &Model) -> String {
