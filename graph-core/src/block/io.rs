@@ -107,8 +107,13 @@ impl<'a> Io<'a> {
     /// values of a port it is cheaper than `copy_from_slice`'s memmove).
     #[inline]
     pub fn set_all(&mut self, port: usize, values: &[f64]) {
-        for (o, &v) in self.output(port).iter_mut().zip(values) {
-            *o = v;
+        let out = self.output(port);
+        // Counted by the port's width, which a generated step knows: a
+        // few moves, where counting by the shorter of the two is a call
+        // to memcpy.
+        match values.get(..out.len()) {
+            Some(values) => out.iter_mut().zip(values).for_each(|(o, &v)| *o = v),
+            None => set_leading(out, values),
         }
     }
 
@@ -139,5 +144,31 @@ impl<'a> Io<'a> {
     #[inline]
     pub fn reached(&self, t_event: f64) -> bool {
         self.t > t_event || (self.t == t_event && !self.left_limit)
+    }
+}
+
+/// The first elements of `out` from `values`, shorter than it: out of line,
+/// so that [`Io::set_all`]'s copy of a whole port stays a copy of a known
+/// length.
+#[cold]
+#[inline(never)]
+fn set_leading(out: &mut [f64], values: &[f64]) {
+    out.iter_mut().zip(values).for_each(|(o, &v)| *o = v);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Io, Port};
+
+    /// A whole port is written from values of its width (or longer); from
+    /// fewer values, their count of leading elements, the rest untouched.
+    #[test]
+    fn set_all_writes_the_port_from_the_values_it_is_given() {
+        let outputs = [Port { offset: 1, width: 3 }];
+        let mut signals = [9.0; 5];
+        Io::new(0.0, false, &[], &mut signals, &[], &outputs).set_all(0, &[1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(signals, [9.0, 1.0, 2.0, 3.0, 9.0]);
+        Io::new(0.0, false, &[], &mut signals, &[], &outputs).set_all(0, &[5.0]);
+        assert_eq!(signals, [9.0, 5.0, 2.0, 3.0, 9.0]);
     }
 }
