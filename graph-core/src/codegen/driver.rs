@@ -412,7 +412,7 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
     /// inlined into each was instead left a call by the compiler once
     /// there were several (the step library's entries).
     #[inline(never)]
-    fn output_sweep(&mut self) -> Result<(), SimError> {
+    fn output_sweep(&mut self) -> Result<(), Box<SimError>> {
         let c = &self.clockwork;
         let all = c.first || c.at_event || c.inputs_changed;
         let mut wrote_finite = self.step.outputs(c.t, &self.x, c.first, all, &c.hit);
@@ -427,7 +427,7 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
             self.all_finite = sim::all_finite(self.step.signals());
             if !self.all_finite {
                 let step = &self.step;
-                return Err(self.blame().signal(step.signals(), c.t, |i| step.diagnose(i)));
+                return Err(Box::new(self.blame().signal(step.signals(), c.t, |i| step.diagnose(i))));
             }
         }
         Ok(())

@@ -183,8 +183,10 @@ pub(crate) trait Sweeps {
     /// Step (1): the blocks' outputs in execution order (each due block
     /// once, or again after a block reset its states here; every block at
     /// the first step, an event or after a host set an input), then a
-    /// check that every signal is finite.
-    fn output_sweep(&mut self) -> Result<(), SimError>;
+    /// check that every signal is finite. The error is boxed so that the
+    /// answer of every major step fits a register (a `SimError` is 80
+    /// bytes, copied through the stack at each step otherwise).
+    fn output_sweep(&mut self) -> Result<(), Box<SimError>>;
     /// The value a host sets of block `block`, a top-level inport
     /// ([`crate::Block::external_input`]).
     fn external_input(&mut self, block: usize) -> Option<&mut [f64]>;
@@ -270,7 +272,7 @@ pub(crate) fn outputs(s: &mut impl Sweeps) -> Result<(), SimError> {
     let c = s.clockwork_mut();
     c.first = false;
     c.inputs_changed = false;
-    result
+    result.map_err(|e| *e)
 }
 
 /// Steps (3) and (4): the updates, then integration to the next major

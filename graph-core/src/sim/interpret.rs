@@ -128,7 +128,7 @@ impl Sweeps for Simulator {
     }
 
     #[inline]
-    fn output_sweep(&mut self) -> Result<(), SimError> {
+    fn output_sweep(&mut self) -> Result<(), Box<SimError>> {
         self.sweep();
         if self.major_step_events() {
             self.sweep();
@@ -140,7 +140,7 @@ impl Sweeps for Simulator {
         });
         if !all_finite(&s.signals) {
             let s = &self.state;
-            return Err(Blame::of(&self.model).signal(&s.signals, s.clockwork.t, |i| s.blocks[i].diagnose()));
+            return Err(Box::new(Blame::of(&self.model).signal(&s.signals, s.clockwork.t, |i| s.blocks[i].diagnose())));
         }
         self.outputs_current = true;
         Ok(())
