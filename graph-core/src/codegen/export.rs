@@ -335,14 +335,18 @@ unsafe extern "C" fn run_rows<G: Exported>(
     }
     let result = catch_unwind(AssertUnwindSafe(|| {
         let (mut steps, mut go_on) = (0u64, true);
-        let outcome = run.run_while(|t, signals| {
-            recorder.sample_onto(t, signals, pending, G::record_row);
-            steps += 1;
-            if pending.len() >= full {
-                go_on = hand_over(rows, ctx, pending, width);
-            }
-            go_on && steps <= max_steps
-        });
+        // Inlined into the run's loop (the compiler left it a call).
+        let outcome = run.run_while(
+            #[inline(always)]
+            |t, signals| {
+                recorder.sample_onto(t, signals, pending, G::record_row);
+                steps += 1;
+                if pending.len() >= full {
+                    go_on = hand_over(rows, ctx, pending, width);
+                }
+                go_on && steps <= max_steps
+            },
+        );
         recorder.flush(&mut |row| pending.extend_from_slice(row));
         if !pending.is_empty() {
             // The run is over: the answer changes nothing.
