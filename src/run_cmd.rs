@@ -173,15 +173,19 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
         // batches; interrupts, the wall budget and progress are looked at
         // per batch, the step budget in the library.
         Some(run) => {
-            let result = run.run_rows(max_steps, ROWS_PER_BATCH, &mut |rows, width| {
+            let mut row = vec![0.0; headers.len()];
+            let result = run.run_rows(max_steps, ROWS_PER_BATCH, &mut |batch| {
                 // Column by column into the trace, row by row into the CSV.
                 if let Some(c) = csv.as_mut() {
-                    rows.chunks_exact(width).for_each(|row| c.write_row(row));
+                    for r in 0..batch.rows() {
+                        batch.row_into(r, &mut row);
+                        c.write_row(&row);
+                    }
                 }
                 if let Some(tr) = trace.as_mut() {
-                    tr.push_rows(rows, width);
+                    tr.push_columns(batch);
                 }
-                last_step = rows.get(rows.len().saturating_sub(width)).copied().unwrap_or(last_step);
+                last_step = batch.last_time().unwrap_or(last_step);
                 progress.tick(last_step);
                 if start.elapsed().as_secs_f64() > max_wall {
                     cut = Some(Cut::MaxWall(max_wall));

@@ -2,6 +2,7 @@
 //! the C interface of [`ctlgraph_core::codegen::export`].
 
 use ctlgraph_core::codegen::export::{self, Api, Spec, Str, TextSink};
+use ctlgraph_core::trace::Columns;
 use ctlgraph_core::{RunStats, SimError};
 use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
@@ -221,18 +222,13 @@ impl AcceleratedRun {
 
     /// Runs to the stop time recording in the library, as
     /// [`ctlgraph_core::trace::Recorder`] records: `sink` receives the
-    /// rows (`[t, recorded columns…]`, one after another, and their width)
-    /// `batch` rows at a time and the rest at the end, and ends the run by
-    /// answering false; so does reaching `max_steps` major steps and one
-    /// more. Returns whether the stop time was reached. A major step costs
-    /// no call across the library's interface: this is the fast way to run
-    /// it whole.
-    pub fn run_rows(
-        &mut self,
-        max_steps: u64,
-        batch: usize,
-        sink: &mut dyn FnMut(&[f64], usize) -> bool,
-    ) -> Result<bool, SimError> {
+    /// rows (`[t, recorded columns…]`, column by column) `batch` rows at a
+    /// time and the rest at the end, and ends the run by answering false;
+    /// so does reaching `max_steps` major steps and one more. Returns
+    /// whether the stop time was reached. A major step costs no call
+    /// across the library's interface: this is the fast way to run it
+    /// whole.
+    pub fn run_rows(&mut self, max_steps: u64, batch: usize, sink: &mut RowsSink<'_>) -> Result<bool, SimError> {
         let run_rows = self.lib.api.run_rows;
         // SAFETY: as `run_guarded` promises.
         self.run_guarded(sink, |run, ctx, error| unsafe { run_rows(run, max_steps, batch, rows, ctx, error) })
@@ -246,12 +242,15 @@ impl AcceleratedRun {
         sink: &mut S,
         start: impl FnOnce(*mut c_void, *mut c_void, &TextSink) -> i32,
     ) -> Result<bool, SimError> {
-        let mut guarded = Guarded { sink, panic: None };
+        let mut guarded = Guarded { sink, panic: None, fault: None };
         let mut message = String::new();
         let error = text_sink(&mut message);
         let answer = start(self.run, (&raw mut guarded).cast::<c_void>(), &error);
         if let Some(payload) = guarded.panic {
             resume_unwind(payload);
+        }
+        if let Some(fault) = guarded.fault {
+            return Err(SimError::Reported(fault.into()));
         }
         match answer {
             export::FINISHED => Ok(true),
@@ -267,6 +266,8 @@ impl AcceleratedRun {
 struct Guarded<'a, S: ?Sized> {
     sink: &'a mut S,
     panic: Option<Box<dyn std::any::Any + Send>>,
+    /// The library broke the interface's promise (the run ended there).
+    fault: Option<&'static str>,
 }
 
 impl<S: ?Sized> Guarded<'_, S> {
@@ -282,14 +283,22 @@ impl<S: ?Sized> Guarded<'_, S> {
     }
 }
 
-type RowsSink = dyn FnMut(&[f64], usize) -> bool;
+/// What [`AcceleratedRun::run_rows`] hands its batches to.
+pub type RowsSink<'a> = dyn FnMut(Columns) -> bool + 'a;
 
-unsafe extern "C" fn rows(ctx: *mut c_void, values: *const f64, n: usize, width: usize) -> bool {
+unsafe extern "C" fn rows(ctx: *mut c_void, values: *const f64, n: usize, width: usize, stride: usize) -> bool {
     // SAFETY: `ctx` is the `Guarded` of the `run_rows` call in progress.
-    let guarded = unsafe { &mut *ctx.cast::<Guarded<RowsSink>>() };
-    // SAFETY: the library passes `n` rows of `width` values for the call.
-    let values = if n * width == 0 { &[][..] } else { unsafe { std::slice::from_raw_parts(values, n * width) } };
-    guarded.call(|sink| sink(values, width))
+    let guarded = unsafe { &mut *ctx.cast::<Guarded<RowsSink<'_>>>() };
+    let len = width.saturating_mul(stride);
+    // SAFETY: the library passes `width·stride` values for the call.
+    let values = if len == 0 { &[][..] } else { unsafe { std::slice::from_raw_parts(values, len) } };
+    match Columns::from_parts(values, width, stride, n) {
+        Some(batch) => guarded.call(|sink| sink(batch)),
+        None => {
+            guarded.fault = Some("the step library handed over a batch of rows outside its buffer");
+            false
+        }
+    }
 }
 
 /// The trampoline for a sink of type `S`, one per type: the sink's code

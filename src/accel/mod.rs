@@ -149,8 +149,8 @@ impl Runner {
         match self.start(sets, seed, stop) {
             Ok(Some(mut run)) => {
                 let mut trace = Trace::for_run(&model, ctlgraph_core::sim::expected_major_steps(&model, stop));
-                run.run_rows(u64::MAX, ROWS_PER_BATCH, &mut |rows, width| {
-                    trace.push_rows(rows, width);
+                run.run_rows(u64::MAX, ROWS_PER_BATCH, &mut |batch| {
+                    trace.push_columns(batch);
                     true
                 })?;
                 Ok((trace, run.stats()))

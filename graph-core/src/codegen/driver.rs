@@ -8,6 +8,7 @@ use crate::compile::{BlockMeta, Model};
 use crate::sim::events::{Crossings, Watch};
 use crate::sim::output::{Dense, RowSystem};
 use crate::sim::{self, Blame, Clockwork, RunStats, SimError, Sweeps, driver};
+use crate::trace::ColumnBatch;
 use ctlgraph_solver::{OdeSystem, Zoh, ZohSingleInput};
 use std::sync::Arc;
 
@@ -44,8 +45,8 @@ pub trait GeneratedStep: Sized + Clone {
     /// Held LTI block `j`'s latched input.
     fn held_input(&self, j: usize) -> &[f64];
     /// Appends a recorded row — t, then the signals at
-    /// [`crate::trace::gather_offsets`], written as constants — to `rows`.
-    fn record_row(t: f64, signals: &[f64], rows: &mut Vec<f64>);
+    /// [`crate::trace::gather_offsets`], written as constants — to `batch`.
+    fn record_row(t: f64, signals: &[f64], batch: &mut ColumnBatch);
     /// Watched block `b`'s zero-crossing functions at (t, x), outputs
     /// computed: at a major step (`major`), or in a stage (modes frozen
     /// as [`GeneratedStep::freeze`] set them). The watched blocks are

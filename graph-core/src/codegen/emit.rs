@@ -391,8 +391,8 @@ impl<'m> Gen<'m> {
             std::iter::once("t".to_string()).chain(gather.iter().map(|i| format!("s[{i}]"))).collect();
         let _ = write!(
             out,
-            "    #[inline(always)]\n    fn record_row(t: f64, signals: &[f64], rows: &mut Vec<f64>) {{\n        \
-             let s: &[f64; {}] = cg::fixed(signals);\n        rows.extend_from_slice(&[{}]);\n    }}\n\n",
+            "    #[inline(always)]\n    fn record_row(t: f64, signals: &[f64], batch: &mut cg::ColumnBatch) {{\n        \
+             let s: &[f64; {}] = cg::fixed(signals);\n        batch.push([{}]);\n    }}\n\n",
             self.model.signal_len,
             values.join(", ")
         );

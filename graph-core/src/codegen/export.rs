@@ -19,12 +19,12 @@
 use super::{Compiled, CompiledSnapshot, GeneratedStep};
 use crate::registry::Registry;
 use crate::sim::RunStats;
-use crate::trace::Recorder;
+use crate::trace::{ColumnBatch, Recorder};
 use std::ffi::c_void;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 /// Bumped whenever [`Api`] or the structs it passes change.
-pub const ABI_VERSION: u32 = 5;
+pub const ABI_VERSION: u32 = 6;
 
 /// The exported function returning the library's [`Api`].
 pub const SYMBOL: &[u8] = b"ctlgraph_accelerated_v1";
@@ -88,10 +88,12 @@ impl TextSink {
 /// for the call only); returns whether the run goes on.
 pub type Sample = unsafe extern "C" fn(ctx: *mut c_void, t: f64, signals: *const f64, len: usize) -> bool;
 
-/// Receives `n` rows of `width` values each, one after another — the
-/// time and the recorded columns, as [`Recorder`] makes them — valid for
-/// the call only; returns whether the run goes on.
-pub type Rows = unsafe extern "C" fn(ctx: *mut c_void, rows: *const f64, n: usize, width: usize) -> bool;
+/// Receives `n` rows of `width` values each — the time and the recorded
+/// columns, as [`Recorder`] makes them — column by column: row r's value
+/// c at `values[c·stride + r]` (a [`ColumnBatch`], `width·stride` values),
+/// valid for the call only; returns whether the run goes on.
+pub type Rows =
+    unsafe extern "C" fn(ctx: *mut c_void, values: *const f64, n: usize, width: usize, stride: usize) -> bool;
 
 /// [`RunWhile`]'s answer: the run reached its stop time.
 pub const FINISHED: i32 = 1;
@@ -229,8 +231,9 @@ fn panic_text(payload: Box<dyn std::any::Any + Send>) -> String {
 struct LibraryRun<G: GeneratedStep> {
     run: Compiled<G>,
     recorder: Recorder,
-    /// Rows waiting to be handed over, one after another.
-    rows: Vec<f64>,
+    /// Rows waiting to be handed over (allocated by the first `run_rows`
+    /// and again when a batch of another size is asked for).
+    batch: ColumnBatch,
 }
 
 /// The run behind a handle from [`create`].
@@ -271,7 +274,7 @@ unsafe fn prepare<G: Exported>(spec: &Spec) -> Result<LibraryRun<G>, String> {
     let seed = spec.has_seed.then_some(spec.seed);
     let model = super::template::compile_case(text, file, &sets, seed, &G::registry())?;
     let run = Compiled::<G>::new(&model, (!spec.stop.is_nan()).then_some(spec.stop))?;
-    Ok(LibraryRun { run, recorder: Recorder::new(&model), rows: Vec::new() })
+    Ok(LibraryRun { run, recorder: Recorder::new(&model), batch: ColumnBatch::default() })
 }
 
 unsafe extern "C" fn create<G: Exported>(spec: *const Spec, error: *const TextSink) -> *mut c_void {
@@ -323,16 +326,20 @@ unsafe extern "C" fn run_rows<G: Exported>(
     error: *const TextSink,
 ) -> i32 {
     // SAFETY: `run` came from `create::<G>`; the loader owns it alone.
-    let (LibraryRun { run, recorder, rows: pending }, error) = unsafe { (library_run::<G>(run), &*error) };
+    let (LibraryRun { run, recorder, batch: pending }, error) = unsafe { (library_run::<G>(run), &*error) };
     let mut recorder = recorder.clone();
-    let width = recorder.width();
-    // At most 65 536 rows at a time: a batch is allocated once per call.
-    let full = batch.clamp(1, 1 << 16) * width;
-    pending.clear();
-    if pending.try_reserve(full).is_err() {
-        error.send(&format!("cannot allocate a batch of {full} recorded values"));
-        return FAILED;
+    // At most 65 536 rows at a time: a batch is allocated once.
+    let (width, capacity) = (recorder.width(), batch.clamp(1, 1 << 16));
+    if (pending.width(), pending.capacity()) != (width, capacity) {
+        match ColumnBatch::new(width, capacity) {
+            Ok(fresh) => *pending = fresh,
+            Err(_) => {
+                error.send(&format!("cannot allocate a batch of {capacity} rows of {width} recorded values"));
+                return FAILED;
+            }
+        }
     }
+    pending.clear();
     let result = catch_unwind(AssertUnwindSafe(|| {
         let (mut steps, mut go_on) = (0u64, true);
         // Inlined into the run's loop (the compiler left it a call).
@@ -341,16 +348,16 @@ unsafe extern "C" fn run_rows<G: Exported>(
             |t, signals| {
                 recorder.sample_onto(t, signals, pending, G::record_row);
                 steps += 1;
-                if pending.len() >= full {
-                    go_on = hand_over(rows, ctx, pending, width);
+                if pending.is_full() {
+                    go_on = hand_over(rows, ctx, pending);
                 }
                 go_on && steps <= max_steps
             },
         );
-        recorder.flush(&mut |row| pending.extend_from_slice(row));
+        recorder.flush(&mut |row| pending.push_slice(row));
         if !pending.is_empty() {
             // The run is over: the answer changes nothing.
-            hand_over(rows, ctx, pending, width);
+            hand_over(rows, ctx, pending);
         }
         outcome
     }));
@@ -359,12 +366,13 @@ unsafe extern "C" fn run_rows<G: Exported>(
 
 /// Hands the batch `pending` to the loader's `rows` and empties it; its
 /// answer. Out of line and cold: once in 256 steps, so the step's own
-/// closure stays small enough to be inlined into the run's loop.
+/// closure stays small.
 #[cold]
 #[inline(never)]
-fn hand_over(rows: Rows, ctx: *mut c_void, pending: &mut Vec<f64>, width: usize) -> bool {
-    // SAFETY: the loader's `rows` accepts the buffer for the call.
-    let go_on = unsafe { rows(ctx, pending.as_ptr(), pending.len() / width, width) };
+fn hand_over(rows: Rows, ctx: *mut c_void, pending: &mut ColumnBatch) -> bool {
+    let (values, width, stride, n) = pending.parts();
+    // SAFETY: the loader's `rows` accepts the batch for the call.
+    let go_on = unsafe { rows(ctx, values.as_ptr(), n, width, stride) };
     pending.clear();
     go_on
 }

@@ -28,6 +28,7 @@ mod template;
 use crate::compile::Model;
 pub use crate::sim::earlier;
 pub use crate::sim::not_finite_bits;
+pub use crate::trace::ColumnBatch;
 pub use ctlgraph_solver::{Zoh, ZohSingleInput};
 pub use driver::{
     Compiled, CompiledSnapshot, GeneratedStep, fixed, fixed_mut, kernel, mismatch, transition, transition_single_input,

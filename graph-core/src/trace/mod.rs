@@ -2,6 +2,10 @@
 //! major steps (with decimation), and keeping them in memory — what plots
 //! are drawn from and checks are evaluated on.
 
+mod batch;
+
+pub use batch::{ColumnBatch, Columns};
+
 use crate::checks::{Check, CheckResult};
 use crate::compile::Model;
 use crate::sim::{RunStats, SimError, Simulator};
@@ -89,20 +93,20 @@ impl Recorder {
         }
     }
 
-    /// [`Recorder::sample`] appending the row to `rows` (rows one after
-    /// another), without staging it, by `write_row` — the gather of
-    /// [`gather_offsets`] as a generated step writes it, with constant
-    /// offsets: what an accelerated run records.
-    #[inline]
+    /// [`Recorder::sample`] appending the row to `batch` without staging
+    /// it, by `write_row` — the gather of [`gather_offsets`] as a generated
+    /// step writes it, with constant offsets: what an accelerated run
+    /// records.
+    #[inline(always)]
     pub fn sample_onto(
         &mut self,
         t: f64,
         signals: &[f64],
-        rows: &mut Vec<f64>,
-        write_row: impl FnOnce(f64, &[f64], &mut Vec<f64>),
+        batch: &mut ColumnBatch,
+        write_row: impl FnOnce(f64, &[f64], &mut ColumnBatch),
     ) {
         if self.due() {
-            write_row(t, signals, rows);
+            write_row(t, signals, batch);
         } else {
             // Kept for `flush`, should this be the last step.
             self.fill(t, signals);
@@ -174,16 +178,11 @@ impl Trace {
         }
     }
 
-    /// Appends rows of `width` values laid one after another (a batch
-    /// from an accelerated run), column by column.
-    pub fn push_rows(&mut self, rows: &[f64], width: usize) {
-        // Rows of exactly `width`: an iterator of known length, so each
-        // column is reserved once and filled without a check per value.
-        if width == 0 {
-            return;
-        }
-        for (c, column) in self.columns.iter_mut().enumerate().take(width) {
-            column.extend(rows.chunks_exact(width).map(|row| row[c]));
+    /// Appends a batch's rows (from an accelerated run), a column at a
+    /// time.
+    pub fn push_columns(&mut self, batch: Columns) {
+        for (c, column) in self.columns.iter_mut().enumerate().take(batch.width()) {
+            column.extend_from_slice(batch.column(c));
         }
     }
 
