@@ -124,6 +124,11 @@ impl Recorder {
     /// `every`-th); counts it.
     #[inline]
     fn due(&mut self) -> bool {
+        // Every step logged (the usual): nothing to count, `skip` stays 0
+        // and `row_written` true.
+        if self.every == 1 {
+            return true;
+        }
         self.row_written = self.skip == 0;
         self.skip = if self.row_written { self.every - 1 } else { self.skip - 1 };
         self.row_written
