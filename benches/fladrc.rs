@@ -267,26 +267,17 @@ fn compiled<G: GeneratedStep>((run, y): &mut (Compiled<G>, usize)) -> (f64, f64)
     (sink, last)
 }
 
-/// The graph's accelerated run, as `graph`.
+/// The graph's accelerated run as `--accelerate` runs it, the same sum of
+/// y and y at the end (`y` its column in the rows).
 fn accelerated_run(run: &mut AcceleratedRun, y: usize) -> (f64, f64) {
-    run.reset();
-    let mut sink = 0.0;
-    let mut last = 0.0;
-    run.run_while(&mut |_, s| {
-        sink += s[y];
-        last = s[y];
-        true
-    })
-    .expect("runs");
-    (sink, last)
+    accelerated::sum_column(run, y, u64::MAX)
 }
 
-/// The graph `file`'s accelerated run, and where it records y.
+/// The graph `file`'s accelerated run, and y's column in its rows.
 fn library(file: &str) -> (AcceleratedRun, usize) {
     let model = model(file, &[]);
-    let y = model.columns.iter().find(|c| c.name == "y").expect("y recorded").offset;
     let text = std::fs::read_to_string(file).expect("the graph");
-    (accelerated::accelerated(&model, &text, file), y)
+    (accelerated::accelerated(&model, &text, file), accelerated::row_column(&model, "y"))
 }
 
 fn bench(c: &mut Criterion) {
