@@ -361,6 +361,21 @@ impl<G: GeneratedStep> Compiled<G> {
         Ok(())
     }
 
+    /// The first watched crossing between `t0` and `t1`, located ([`Sweeps::locate_crossing`]).
+    #[inline(never)]
+    fn locate_watched(&mut self, t0: f64, t1: f64, target: f64) -> Result<Option<f64>, SimError> {
+        let mut stage = Stage { step: &mut self.step, t_end: target };
+        let x = &mut self.x[..self.clockwork.n_integrated];
+        let Some(t) = self.watch.locate(&mut stage, &mut self.clockwork.integ, t0, t1, x) else { return Ok(None) };
+        for (b, _, k) in self.watch.fired() {
+            self.step.crossing_located(b, k);
+        }
+        if let Some((b, _)) = self.watch.count_event(t, &self.names.meta)? {
+            self.step.freeze(b, false);
+        }
+        Ok(Some(t))
+    }
+
     /// What names a block in this run's errors.
     fn blame(&self) -> Blame<'_> {
         let n = &*self.names;
@@ -473,20 +488,11 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
         }
     }
 
+    /// As the interpreter's: a graph without watched crossings (most)
+    /// answers without a call per step.
+    #[inline(always)]
     fn locate_crossing(&mut self, t0: f64, t1: f64, target: f64) -> Result<Option<f64>, SimError> {
-        if self.watch.blocks.is_empty() {
-            return Ok(None);
-        }
-        let mut stage = Stage { step: &mut self.step, t_end: target };
-        let x = &mut self.x[..self.clockwork.n_integrated];
-        let Some(t) = self.watch.locate(&mut stage, &mut self.clockwork.integ, t0, t1, x) else { return Ok(None) };
-        for (b, _, k) in self.watch.fired() {
-            self.step.crossing_located(b, k);
-        }
-        if let Some((b, _)) = self.watch.count_event(t, &self.names.meta)? {
-            self.step.freeze(b, false);
-        }
-        Ok(Some(t))
+        if self.watch.blocks.is_empty() { Ok(None) } else { self.locate_watched(t0, t1, target) }
     }
 
     #[inline(always)]
