@@ -376,6 +376,38 @@ impl<G: GeneratedStep> Compiled<G> {
         Ok(Some(t))
     }
 
+    /// [`Sweeps::output_sweep`]: the step checks what it writes; signals
+    /// it did not write this time were checked when they were, unless a
+    /// step found one not finite (then the whole buffer is checked again
+    /// at every step).
+    #[inline(always)]
+    pub(super) fn sweep_outputs(&mut self) -> Result<(), Box<SimError>> {
+        let c = &self.clockwork;
+        let all = c.first || c.at_event || c.inputs_changed;
+        let mut wrote_finite = self.step.outputs(c.t, &self.x, c.first, all, &c.hit);
+        if !self.watch.blocks.is_empty() {
+            if self.step.major_step_events(c.t, &mut self.x) {
+                wrote_finite = self.step.outputs(c.t, &self.x, c.first, all, &c.hit);
+            }
+            let (step, t, x) = (&mut self.step, c.t, &self.x);
+            self.watch.record_signs(|b, _, g| step.zero_crossings(b, t, false, x, true, g));
+        }
+        if !(wrote_finite && self.all_finite) {
+            self.all_finite = sim::all_finite(self.step.signals());
+            if !self.all_finite {
+                let step = &self.step;
+                return Err(Box::new(self.blame().signal(step.signals(), c.t, |i| step.diagnose(i))));
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Sweeps::update_sweep`].
+    #[inline(always)]
+    pub(super) fn sweep_updates(&mut self) {
+        self.step.updates(self.clockwork.t, &self.x, &self.clockwork.hit);
+    }
+
     /// What names a block in this run's errors.
     fn blame(&self) -> Blame<'_> {
         let n = &*self.names;
@@ -418,35 +450,15 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
         }
     }
 
-    /// The step checks what it writes; signals it did not write this time
-    /// were checked when they were, unless a step found one not finite
-    /// (then the whole buffer is checked again at every step).
-    ///
     /// Never inlined, while the generated sweep is always inlined into it:
-    /// one copy of the graph's code, called from every loop (a run, a
-    /// host's step, a refresh), costs a call per major step; a copy
-    /// inlined into each was instead left a call by the compiler once
-    /// there were several (the step library's entries).
+    /// one copy of the graph's code, called from every loop (a host's
+    /// step, a refresh, a run with a sink per step), costs a call per
+    /// major step; a copy inlined into each was instead left a call by the
+    /// compiler once there were several (the step library's entries). The
+    /// one loop that runs whole runs has its own copy ([`super::inlined`]).
     #[inline(never)]
     fn output_sweep(&mut self) -> Result<(), Box<SimError>> {
-        let c = &self.clockwork;
-        let all = c.first || c.at_event || c.inputs_changed;
-        let mut wrote_finite = self.step.outputs(c.t, &self.x, c.first, all, &c.hit);
-        if !self.watch.blocks.is_empty() {
-            if self.step.major_step_events(c.t, &mut self.x) {
-                wrote_finite = self.step.outputs(c.t, &self.x, c.first, all, &c.hit);
-            }
-            let (step, t, x) = (&mut self.step, c.t, &self.x);
-            self.watch.record_signs(|b, _, g| step.zero_crossings(b, t, false, x, true, g));
-        }
-        if !(wrote_finite && self.all_finite) {
-            self.all_finite = sim::all_finite(self.step.signals());
-            if !self.all_finite {
-                let step = &self.step;
-                return Err(Box::new(self.blame().signal(step.signals(), c.t, |i| step.diagnose(i))));
-            }
-        }
-        Ok(())
+        self.sweep_outputs()
     }
 
     #[inline(always)]
@@ -457,7 +469,7 @@ impl<G: GeneratedStep> Sweeps for Compiled<G> {
     /// Never inlined, the generated sweep always into it (as `output_sweep`).
     #[inline(never)]
     fn update_sweep(&mut self) {
-        self.step.updates(self.clockwork.t, &self.x, &self.clockwork.hit);
+        self.sweep_updates();
     }
 
     #[inline(always)]

@@ -343,7 +343,7 @@ unsafe extern "C" fn run_rows<G: Exported>(
     let result = catch_unwind(AssertUnwindSafe(|| {
         let (mut steps, mut go_on) = (0u64, true);
         // Inlined into the run's loop (the compiler left it a call).
-        let outcome = run.run_while(
+        let outcome = run.run_while_inlined(
             #[inline(always)]
             |t, signals| {
                 recorder.sample_onto(t, signals, pending, G::record_row);

@@ -23,6 +23,7 @@ mod driver;
 mod emit;
 pub mod export;
 mod formula;
+mod inlined;
 mod template;
 
 use crate::compile::Model;
