@@ -173,10 +173,11 @@ pub(crate) fn run(graph: &Path, opts: RunOptions, sets: &[String]) -> Result<(),
         // batches; interrupts, the wall budget and progress are looked at
         // per batch, the step budget in the library.
         Some(run) => {
-            let mut row = vec![0.0; headers.len()];
+            let mut row = Vec::new();
             let result = run.run_rows(max_steps, ROWS_PER_BATCH, &mut |batch| {
                 // Column by column into the trace, row by row into the CSV.
                 if let Some(c) = csv.as_mut() {
+                    row.resize(batch.width(), 0.0);
                     for r in 0..batch.rows() {
                         batch.row_into(r, &mut row);
                         c.write_row(&row);

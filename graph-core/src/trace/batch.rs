@@ -132,9 +132,10 @@ impl<'a> Columns<'a> {
         }
     }
 
-    /// The last row's first value (a run's time), if there is a row.
+    /// The last row's first value (a run's time), if there is a row with
+    /// values.
     pub fn last_time(&self) -> Option<f64> {
-        self.rows.checked_sub(1).map(|r| self.values[r])
+        self.rows.checked_sub(1).and_then(|r| self.values.get(r).copied())
     }
 }
 
@@ -169,5 +170,8 @@ mod tests {
         assert!(Columns::from_parts(values, width, stride + 1, rows).is_none());
         batch.clear();
         assert!(batch.is_empty() && batch.columns().last_time().is_none());
+        // Rows without values (no time column) have no last time.
+        let empty = Columns::from_parts(&[], 0, 4, 2).expect("fits");
+        assert_eq!((empty.rows(), empty.last_time()), (2, None));
     }
 }
