@@ -220,10 +220,7 @@ fn run(
     seed: Option<u64>,
     accelerate: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<RunResult> {
-    let sets = overrides(set)?;
-    let accelerate = accelerate_arg(accelerate)?;
-    let model = py.detach(|| GRAPHS.compile(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
-    let runner = runner(py, accelerate, &model, &path)?;
+    let (sets, model, runner) = prepared(py, &path, set, seed, accelerate)?;
     let (trace, checks, counts, wall) =
         py.detach(|| simulate(&runner, model, &sets, seed, stop)).map_err(SimulationError::new_err)?;
     let Trace { headers, columns, .. } = trace;
@@ -243,6 +240,26 @@ fn run(
 }
 
 /// Graphs run before: a run of one with other values compiles on its structure.
+/// A graph's overrides, its compiled model and the runner asked for.
+type Prepared = (Vec<(String, String)>, Model, Runner);
+
+/// What `run()` and `load()` start from: the graph `path` with `set`'s
+/// overrides and `seed`, compiled (cached), and the runner `accelerate`
+/// asks for.
+pub(crate) fn prepared(
+    py: Python<'_>,
+    path: &std::path::Path,
+    set: Option<&Bound<'_, PyDict>>,
+    seed: Option<u64>,
+    accelerate: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Prepared> {
+    let sets = overrides(set)?;
+    let accelerate = accelerate_arg(accelerate)?;
+    let model = py.detach(|| GRAPHS.compile(path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
+    let runner = runner(py, accelerate, &model, path)?;
+    Ok((sets, model, runner))
+}
+
 static GRAPHS: ctlgraph::cache::GraphCache = ctlgraph::cache::GraphCache::new();
 
 /// Validates the graph file `path` and returns its blocks in execution

@@ -1,8 +1,7 @@
 //! `ctlgraph.load`: a graph driven step by step from Python, interpreted
 //! or in its step library (`ctlgraph::accel::Stepper`).
 
-use crate::accelerate::{accelerate_arg, runner};
-use crate::{GRAPHS, SimulationError, blocks_of, graph_error, overrides};
+use crate::{SimulationError, blocks_of, graph_error, prepared};
 use ctlgraph::accel::{Stepper, StepperSnapshot};
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -169,10 +168,7 @@ pub(crate) fn load(
     seed: Option<u64>,
     accelerate: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<LoadedModel> {
-    let sets = overrides(set)?;
-    let accelerate = accelerate_arg(accelerate)?;
-    let model = py.detach(|| GRAPHS.compile(&path, &sets, seed)).map_err(|d| graph_error(py, &d))?;
-    let runner = runner(py, accelerate, &model, &path)?;
+    let (sets, model, runner) = prepared(py, &path, set, seed, accelerate)?;
     let stepper = py.detach(|| Stepper::new(&runner, model, &sets, seed)).map_err(SimulationError::new_err)?;
     Ok(LoadedModel { sim: Mutex::new(stepper) })
 }
