@@ -82,13 +82,8 @@ impl ColumnBatch {
         self.rows = r + 1;
     }
 
-    /// The rows held, to be read column by column.
-    pub fn columns(&self) -> Columns<'_> {
-        Columns { values: &self.values, width: self.width, stride: self.capacity, rows: self.rows }
-    }
-
-    /// The parts [`Columns::from_parts`] takes back: values, width,
-    /// stride, rows (what crosses the library's interface).
+    /// The rows held, as the parts [`Columns::from_parts`] reads them:
+    /// values, width, stride, rows (what crosses the library's interface).
     pub fn parts(&self) -> (&[f64], usize, usize, usize) {
         (&self.values, self.width, self.capacity, self.rows)
     }
@@ -143,8 +138,9 @@ impl<'a> Columns<'a> {
 mod tests {
     use super::{ColumnBatch, Columns};
 
-    /// Rows pushed whole and as slices read back by column and by row;
-    /// a full batch takes no more; the parts make the same view.
+    /// Rows pushed whole and as slices read back by column and by row
+    /// through the parts that cross the library's interface; a full batch
+    /// takes no more; parts that do not fit make no view.
     #[test]
     fn rows_go_in_by_row_and_come_out_by_column() {
         let mut batch = ColumnBatch::new(3, 4).expect("allocates");
@@ -155,7 +151,8 @@ mod tests {
         batch.push([1.5, 7.0, 8.0, 9.0]);
         assert!(batch.is_full());
         batch.push([2.0, 0.0, 0.0]);
-        let view = batch.columns();
+        let (values, width, stride, rows) = batch.parts();
+        let view = Columns::from_parts(values, width, stride, rows).expect("fits");
         assert_eq!((view.rows(), view.width()), (4, 3));
         assert_eq!(view.column(0), [0.0, 0.5, 1.0, 1.5]);
         assert_eq!(view.column(1), [1.0, 3.0, 5.0, 7.0]);
@@ -164,12 +161,13 @@ mod tests {
         view.row_into(1, &mut row);
         assert_eq!(row, [0.5, 3.0, 4.0]);
         assert_eq!(view.last_time(), Some(1.5));
-        let (values, width, stride, rows) = batch.parts();
-        let again = Columns::from_parts(values, width, stride, rows).expect("fits");
-        assert_eq!(again.column(2), view.column(2));
         assert!(Columns::from_parts(values, width, stride + 1, rows).is_none());
+        assert!(Columns::from_parts(values, width, stride, stride + 1).is_none());
         batch.clear();
-        assert!(batch.is_empty() && batch.columns().last_time().is_none());
+        let (values, width, stride, rows) = batch.parts();
+        assert!(
+            batch.is_empty() && Columns::from_parts(values, width, stride, rows).expect("fits").last_time().is_none()
+        );
         // Rows without values (no time column) have no last time.
         let empty = Columns::from_parts(&[], 0, 4, 2).expect("fits");
         assert_eq!((empty.rows(), empty.last_time()), (2, None));
